@@ -1,0 +1,129 @@
+"""Wrenches applied from outside (user commands), held until replaced or timed out.
+
+Each held wrench has a body, a key (the ROS frame_id it came with: a new wrench with the
+same body and key replaces it) and one of three ways to act:
+
+``world``  world axes, at the centre of mass;
+``body``   body axes, at the centre of mass;
+``point``  body axes, at a point given in body-frame coordinates;
+``world_point``  world axes, at a point given in body-frame coordinates (a force that
+keeps its direction while the body turns under it).
+
+A body-axes force ``f`` at body point ``p`` gives the body-axes torque ``(p - c) x f`` about
+the centre of mass ``c``, so every held wrench folds into four (N, 3) sums (world force and
+torque, body force and torque) rebuilt only when the holdings change; a stage then costs
+two rotations whatever the number of wrenches.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigid_sim.core import rotation
+
+FRAMES = ('world', 'body', 'point', 'world_point')
+DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
+DEFAULT_MAX_TORQUE = 1.0e4  # N m
+
+
+@dataclass(frozen=True)
+class HeldWrench:
+    body: int
+    frame: str
+    force: np.ndarray    # (3,) N
+    torque: np.ndarray   # (3,) N m, about the centre of mass
+    lever: np.ndarray    # (3,) m, body axes, from the centre of mass to a world_point force
+    expires: float       # simulated time at which it stops acting (inf: held until replaced)
+
+
+class AppliedWrenches:
+    """The wrenches currently held on the bodies of a scene."""
+
+    def __init__(self, bodies, max_force=DEFAULT_MAX_FORCE, max_torque=DEFAULT_MAX_TORQUE,
+                 accepts=None):
+        self._bodies = bodies
+        self.max_force = float(max_force)
+        self.max_torque = float(max_torque)
+        self._held = {}
+        count = bodies.count
+        self._sums = {'world': np.zeros((count, 6)), 'body': np.zeros((count, 6))}
+        # Bodies that take wrench input: (N,) bool, all by default.
+        self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
+        self._rebuild()
+
+    def check(self, force, torque):
+        """Finite (3,) force and torque within the limits, or ValueError saying why."""
+        force = np.asarray(force, dtype=float).reshape(3)
+        torque = np.asarray(torque, dtype=float).reshape(3)
+        if not (np.all(np.isfinite(force)) and np.all(np.isfinite(torque))):
+            raise ValueError(f'non-finite wrench: force {force}, torque {torque}')
+        if np.linalg.norm(force) > self.max_force:
+            raise ValueError(f'|force| {np.linalg.norm(force):.3g} N above the scene limit '
+                             f'max_force {self.max_force:.3g} N')
+        if np.linalg.norm(torque) > self.max_torque:
+            raise ValueError(f'|torque| {np.linalg.norm(torque):.3g} N m above the scene limit '
+                             f'max_torque {self.max_torque:.3g} N m')
+        return force, torque
+
+    def hold(self, body, key, frame, force, torque=(0.0, 0.0, 0.0), point=None,
+             expires=np.inf):
+        """Hold a wrench on ``body`` until ``expires``, replacing the one under ``key``.
+
+        Raises ValueError, and changes nothing, for a non-finite or above-limit wrench or
+        an unknown frame.
+        """
+        if frame not in FRAMES:
+            raise ValueError(f'unknown wrench frame {frame!r}; valid: {FRAMES}')
+        if not self.torqued[body]:
+            raise ValueError(f'body {self._bodies.names[body]!r} takes no wrench input')
+        force, torque = self.check(force, torque)
+        lever = np.zeros(3)
+        if frame in ('point', 'world_point'):
+            lever = np.asarray(point, dtype=float).reshape(3) - self._bodies.com_in_body[body]
+        if frame == 'point':
+            torque = torque + np.cross(lever, force)
+            frame = 'body'
+        self._held[(body, key)] = HeldWrench(body, frame, force, torque, lever, float(expires))
+        self._rebuild()
+
+    def release(self, body=None, key=None):
+        """Drop the wrench under (body, key), or all of them when called with no arguments."""
+        if body is None:
+            self._held.clear()
+        else:
+            self._held.pop((body, key), None)
+        self._rebuild()
+
+    def expire(self, time):
+        """Drop wrenches whose hold has run out by simulated ``time``."""
+        if time < self._next_expiry:
+            return
+        self._held = {k: w for k, w in self._held.items() if w.expires > time}
+        self._rebuild()
+
+    def _rebuild(self):
+        for sums in self._sums.values():
+            sums[:] = 0.0
+        at_points = [w for w in self._held.values() if w.frame == 'world_point']
+        for held in self._held.values():
+            sums = self._sums['body' if held.frame == 'body' else 'world']
+            sums[held.body] += np.concatenate((held.force, held.torque))
+        self._point_body = np.array([w.body for w in at_points], dtype=int)
+        self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3)
+        self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3)
+        self._next_expiry = min((w.expires for w in self._held.values()), default=np.inf)
+
+    @property
+    def held(self):
+        """Held wrenches, keyed by (body, key)."""
+        return dict(self._held)
+
+    def accumulate(self, snapshot, force, torque):
+        world, body = self._sums['world'], self._sums['body']
+        force += world[:, :3] + rotation.rotate(snapshot.rotation, body[:, :3])
+        torque += world[:, 3:] + rotation.rotate(snapshot.rotation, body[:, 3:])
+        if self._point_body.size:
+            lever = rotation.rotate(snapshot.rotation[self._point_body], self._point_lever)
+            np.add.at(torque, self._point_body, np.cross(lever, self._point_force))
+
+    def potential_energy(self, snapshot):
+        return 0.0

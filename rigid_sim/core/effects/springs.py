@@ -1,0 +1,92 @@
+"""Linear springs with dampers between body points and world anchors or other bodies.
+
+Each spring pulls its two attachment points together with
+``f = -(k (l - l0) + c dl/dt) u`` along the unit vector ``u`` from the second end to the
+first; the torque on a body is ``(p - x) x f``. With ``l0 = 0`` the force is the full vector
+``-k d - c d'`` and stays defined when the points meet.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigid_sim.core.state import POSITION
+
+
+@dataclass(frozen=True)
+class SpringSpec:
+    """One spring, as the scene gives it."""
+
+    body: int                  # index of the first body
+    point: np.ndarray          # (3,) m, attachment in the first body's frame
+    stiffness: float           # N/m
+    damping: float = 0.0       # N s/m
+    rest_length: float = 0.0   # m
+    anchor: np.ndarray = None  # (3,) m, world; set when the spring ends in the world
+    other: int = None          # index of the second body; set when it ends on a body
+    other_point: np.ndarray = None  # (3,) m, in the second body's frame
+
+
+class Springs:
+    """All springs of a scene, evaluated together."""
+
+    def __init__(self, bodies, specs):
+        self._body = np.array([s.body for s in specs], dtype=int)
+        self._point = np.array([s.point for s in specs], dtype=float).reshape(-1, 3)
+        self._stiffness = np.array([s.stiffness for s in specs], dtype=float)
+        self._damping = np.array([s.damping for s in specs], dtype=float)
+        self._rest = np.array([s.rest_length for s in specs], dtype=float)
+        to_body = np.array([s.other is not None for s in specs], dtype=bool)
+        # Springs to the world get a dummy second body 0; their second end is masked below.
+        self._to_body = to_body
+        self._other = np.array([s.other if s.other is not None else 0 for s in specs], dtype=int)
+        self._other_point = np.array(
+            [s.other_point if s.other is not None else np.zeros(3) for s in specs], dtype=float)
+        self._anchor = np.array(
+            [s.anchor if s.other is None else np.zeros(3) for s in specs], dtype=float)
+        self.torqued = np.zeros(bodies.count, dtype=bool)
+        self.torqued[self._body] = True
+        self.torqued[self._other[to_body]] = True
+
+    def _ends(self, snapshot):
+        """World positions and velocities of both ends, (S, 3) each."""
+        first = snapshot.point_world(self._body, self._point)
+        first_velocity = snapshot.point_velocity(self._body, first)
+        second = snapshot.point_world(self._other, self._other_point)
+        second_velocity = snapshot.point_velocity(self._other, second)
+        mask = self._to_body[:, None]
+        second = np.where(mask, second, self._anchor)
+        second_velocity = np.where(mask, second_velocity, 0.0)
+        return first, first_velocity, second, second_velocity
+
+    def _tension(self, snapshot):
+        """Force on the first end (S, 3), and the ends, from Hooke's law plus the damper."""
+        first, first_velocity, second, second_velocity = self._ends(snapshot)
+        separation = first - second
+        relative_velocity = first_velocity - second_velocity
+        length = np.linalg.norm(separation, axis=1)
+        # Zero rest length: the force is linear in the separation and needs no direction.
+        safe_length = np.where(length > 0.0, length, 1.0)
+        direction = separation / safe_length[:, None]
+        stretch = np.where(self._rest > 0.0, length - self._rest, 0.0)
+        rate = np.sum(relative_velocity * direction, axis=1)
+        along = -(self._stiffness * stretch + self._damping * rate)[:, None] * direction
+        zero_rest = -(self._stiffness[:, None] * separation
+                      + self._damping[:, None] * relative_velocity)
+        force = np.where((self._rest > 0.0)[:, None], along, zero_rest)
+        return force, first, second
+
+    def accumulate(self, snapshot, force, torque):
+        spring_force, first, second = self._tension(snapshot)
+        x = snapshot.y[:, POSITION]
+        np.add.at(force, self._body, spring_force)
+        np.add.at(torque, self._body, np.cross(first - x[self._body], spring_force))
+        on_body = self._to_body
+        other = self._other[on_body]
+        np.add.at(force, other, -spring_force[on_body])
+        np.add.at(torque, other, np.cross(second[on_body] - x[other], -spring_force[on_body]))
+
+    def potential_energy(self, snapshot):
+        """``sum k (l - l0)^2 / 2``, J."""
+        first, _, second, _ = self._ends(snapshot)
+        length = np.linalg.norm(first - second, axis=1)
+        return float(0.5 * np.sum(self._stiffness * (length - self._rest) ** 2))

@@ -1,0 +1,154 @@
+"""Rigid bodies as arrays: the static model, the packed Baraff state and what derives from it.
+
+The static model (masses, inertias, centre-of-mass offsets) is kept apart from the dynamic
+state ``y`` (N, 13) = [x, q, P, L] so that integrators copy and combine only what changes.
+See docs/conventions.md for the layout and frames.
+"""
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from rigid_sim.core import rotation
+from rigid_sim.core.inertia import check_inertia
+
+POSITION = slice(0, 3)
+ORIENTATION = slice(3, 7)
+LINEAR_MOMENTUM = slice(7, 10)
+ANGULAR_MOMENTUM = slice(10, 13)
+STATE_WIDTH = 13
+
+
+@dataclass(frozen=True)
+class RigidBodies:
+    """Static properties of N bodies, in scene order."""
+
+    names: tuple          # (N,) str, unique
+    mass: np.ndarray      # (N,) kg
+    inertia_body: np.ndarray  # (N, 3, 3) kg m^2 about the centre of mass, body axes
+    com_in_body: np.ndarray   # (N, 3) m, centre of mass in body-frame coordinates
+
+    def __post_init__(self):
+        mass = np.asarray(self.mass, dtype=float)
+        if not np.all(np.isfinite(mass) & (mass > 0.0)):
+            raise ValueError(f'masses must be finite and positive, got {mass}')
+        for name, inertia in zip(self.names, self.inertia_body):
+            try:
+                check_inertia(inertia)
+            except ValueError as error:
+                raise ValueError(f'body {name!r}: {error}') from None
+        if len(set(self.names)) != len(self.names):
+            raise ValueError(f'body names must be unique, got {list(self.names)}')
+
+    @property
+    def count(self):
+        return len(self.names)
+
+    @cached_property
+    def inertia_body_inv(self):
+        """(N, 3, 3) inverse body inertia, ``I_body^-1``."""
+        return np.linalg.inv(self.inertia_body)
+
+    @cached_property
+    def principal_moments(self):
+        """(N, 3) principal moments and (N, 3, 3) body-from-principal rotations.
+
+        ``eigh``: symmetric input, orthonormal eigenvectors, best precision.
+        """
+        moments, axes = np.linalg.eigh(self.inertia_body)
+        # A proper rotation (det +1) so the axes can become a quaternion.
+        axes[:, :, 2] *= np.sign(np.linalg.det(axes))[:, None]
+        return moments, axes
+
+    def index(self, name):
+        """Scene index of the body called ``name``; KeyError lists the known names."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise KeyError(f'unknown body {name!r}; bodies are {list(self.names)}') from None
+
+
+def initial_state(bodies, origin, orientation, linear_velocity, angular_velocity):
+    """Packed state (N, 13) from the pose and twist of each body frame.
+
+    Parameters
+    ----------
+    origin : (N, 3) body-frame origin, world, m
+    orientation : (N, 4) quaternion (x, y, z, w), body to world
+    linear_velocity : (N, 3) velocity of the body-frame origin, world, m/s
+    angular_velocity : (N, 3) world axes, rad/s
+    """
+    q = rotation.normalize(np.asarray(orientation, dtype=float).reshape(-1, 4))
+    matrices = rotation.to_matrix(q)
+    com_offset = rotation.rotate(matrices, bodies.com_in_body)
+    omega = np.asarray(angular_velocity, dtype=float).reshape(-1, 3)
+    velocity_com = linear_velocity + np.cross(omega, com_offset)
+    inertia_world = matrices @ bodies.inertia_body @ matrices.transpose(0, 2, 1)
+    y = np.empty((bodies.count, STATE_WIDTH))
+    y[:, POSITION] = np.asarray(origin, dtype=float) + com_offset
+    y[:, ORIENTATION] = q
+    y[:, LINEAR_MOMENTUM] = bodies.mass[:, None] * velocity_com
+    y[:, ANGULAR_MOMENTUM] = rotation.rotate(inertia_world, omega)
+    return y
+
+
+class Snapshot:
+    """Kinematics of every body at one instant, each quantity computed once when first asked.
+
+    Effects and diagnostics share one snapshot per integrator stage, so ``R`` and
+    ``omega`` are not recomputed by every effect that needs them.
+    """
+
+    def __init__(self, bodies, y, time, rotation=None):
+        self.bodies = bodies
+        self.y = y
+        self.time = time
+        if rotation is not None:  # the caller already has R: seed the cache
+            self.__dict__['rotation'] = rotation
+
+    @cached_property
+    def rotation(self):
+        """(N, 3, 3) ``R``, body to world."""
+        return rotation.to_matrix(self.y[:, ORIENTATION])
+
+    @cached_property
+    def velocity(self):
+        """(N, 3) centre-of-mass velocity ``v = P / M``, world, m/s."""
+        return self.y[:, LINEAR_MOMENTUM] / self.bodies.mass[:, None]
+
+    @cached_property
+    def angular_velocity(self):
+        """(N, 3) ``omega = R I_body^-1 R^T L``, world, rad/s."""
+        body_l = rotation.rotate_inverse(self.rotation, self.y[:, ANGULAR_MOMENTUM])
+        return rotation.rotate(self.rotation, rotation.rotate(self.bodies.inertia_body_inv, body_l))
+
+    @cached_property
+    def com_offset(self):
+        """(N, 3) ``R c``: from the body-frame origin to the centre of mass, world, m."""
+        return rotation.rotate(self.rotation, self.bodies.com_in_body)
+
+    def point_world(self, body_index, point_body):
+        """World position of body-frame points: ``x + R (p - c)``, (K,) and (K, 3) -> (K, 3)."""
+        lever = point_body - self.bodies.com_in_body[body_index]
+        return self.y[body_index, POSITION] + rotation.rotate(self.rotation[body_index], lever)
+
+    def point_velocity(self, body_index, point_world):
+        """Velocity of material points: ``v + omega x (p - x)``, (K,), (K, 3) -> (K, 3)."""
+        lever = point_world - self.y[body_index, POSITION]
+        return self.velocity[body_index] + np.cross(self.angular_velocity[body_index], lever)
+
+    def body_frame_pose(self):
+        """Origin (N, 3) and orientation (N, 4) of each body frame."""
+        return self.y[:, POSITION] - self.com_offset, self.y[:, ORIENTATION]
+
+    def body_frame_twist(self):
+        """Velocity of each body-frame origin and angular velocity, world axes, (N, 3) each."""
+        origin_velocity = self.velocity - np.cross(self.angular_velocity, self.com_offset)
+        return origin_velocity, self.angular_velocity
+
+    def kinetic_energy(self):
+        """(N,) ``P.P / 2M + omega.L / 2``, J."""
+        y = self.y
+        translational = 0.5 * np.sum(y[:, LINEAR_MOMENTUM] ** 2, axis=1) / self.bodies.mass
+        rotational = 0.5 * np.sum(self.angular_velocity * y[:, ANGULAR_MOMENTUM], axis=1)
+        return translational + rotational
