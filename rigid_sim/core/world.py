@@ -28,6 +28,10 @@ class World:
         self.integrator = make_integrator(integrator, self, tolerance)
         self.reset()
 
+    def effect(self, kind):
+        """The effect of class ``kind`` in this world, or None when the scene has none."""
+        return next((e for e in self.effects if isinstance(e, kind)), None)
+
     def reset(self):
         """Back to the initial state at time 0."""
         self.y = self.initial.copy()

@@ -3,6 +3,9 @@ from rigid_sim.core.integrators.adaptive import Dopri5
 from rigid_sim.core.integrators.runge_kutta import RK4, RK4World, ExplicitEuler
 from rigid_sim.core.integrators.symplectic_euler import SemiImplicitEuler
 
+# The node's default; chosen from the accuracy benchmark (docs/accuracy.md).
+DEFAULT_INTEGRATOR = 'rk4'
+
 REGISTRY = {cls.name: cls for cls in (ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5)}
 
 
