@@ -24,6 +24,7 @@ class World:
         self.torqued = np.zeros(bodies.count, dtype=bool)
         for effect in self.effects:
             self.torqued |= effect.torqued
+        self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._expiring = [e for e in self.effects if hasattr(e, 'expire')]
         self.integrator = make_integrator(integrator, self, tolerance)
         self.reset()

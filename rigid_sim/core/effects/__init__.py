@@ -8,6 +8,9 @@ An effect is a small object with
 ``torqued`` : (N,) bool
     which bodies it may apply a torque to (the rest stay torque-free, which lets
     integrators use the exact free-rotation flow for them);
+``velocity_dependent`` : bool
+    whether its wrench depends on momenta (dampers): splitting methods then integrate
+    their kicks to full order instead of taking one explicit step;
 ``potential_energy(snapshot)`` : float
     stored energy, J (0 for dissipative or external effects).
 

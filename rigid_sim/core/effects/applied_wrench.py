@@ -48,6 +48,7 @@ class AppliedWrenches:
         self._sums = {'world': np.zeros((count, 6)), 'body': np.zeros((count, 6))}
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
+        self.velocity_dependent = False
         self._rebuild()
 
     def check(self, force, torque):

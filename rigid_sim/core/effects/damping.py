@@ -16,6 +16,7 @@ class Damping:
         self.linear = float(linear)
         self.angular = float(angular)
         self.torqued = np.full(bodies.count, self.angular != 0.0)
+        self.velocity_dependent = True
 
     def accumulate(self, snapshot, force, torque):
         force -= self.linear * snapshot.y[:, LINEAR_MOMENTUM]

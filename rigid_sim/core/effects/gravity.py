@@ -11,6 +11,7 @@ class Gravity:
         self.acceleration = np.asarray(acceleration, dtype=float).reshape(3)
         self._weight = bodies.mass[:, None] * self.acceleration  # (N, 3) N, precomputed
         self.torqued = np.zeros(bodies.count, dtype=bool)
+        self.velocity_dependent = False
 
     def accumulate(self, snapshot, force, torque):
         force += self._weight

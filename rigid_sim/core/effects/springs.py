@@ -40,9 +40,12 @@ class Springs:
         self._to_body = to_body
         self._other = np.array([s.other if s.other is not None else 0 for s in specs], dtype=int)
         self._other_point = np.array(
-            [s.other_point if s.other is not None else np.zeros(3) for s in specs], dtype=float)
+            [s.other_point if s.other is not None else np.zeros(3) for s in specs],
+            dtype=float).reshape(-1, 3)
         self._anchor = np.array(
-            [s.anchor if s.other is None else np.zeros(3) for s in specs], dtype=float)
+            [s.anchor if s.other is None else np.zeros(3) for s in specs],
+            dtype=float).reshape(-1, 3)
+        self.velocity_dependent = bool(np.any(self._damping != 0.0))
         self.torqued = np.zeros(bodies.count, dtype=bool)
         self.torqued[self._body] = True
         self.torqued[self._other[to_body]] = True

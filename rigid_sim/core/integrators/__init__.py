@@ -1,12 +1,14 @@
 """Integrators behind one interface (see ``base.Integrator``), chosen by name."""
 from rigid_sim.core.integrators.adaptive import Dopri5
 from rigid_sim.core.integrators.runge_kutta import RK4, RK4World, ExplicitEuler
+from rigid_sim.core.integrators.splitting import DLM, DLM4, ExactSplit, ExactSplit4
 from rigid_sim.core.integrators.symplectic_euler import SemiImplicitEuler
 
 # The node's default; chosen from the accuracy benchmark (docs/accuracy.md).
 DEFAULT_INTEGRATOR = 'rk4'
 
-REGISTRY = {cls.name: cls for cls in (ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5)}
+REGISTRY = {cls.name: cls for cls in (
+    ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5, DLM, DLM4, ExactSplit, ExactSplit4)}
 
 
 def make_integrator(name, system, tolerance=1e-6):

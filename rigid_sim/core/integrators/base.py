@@ -9,7 +9,9 @@ by ``dt``. It is built for a *system*, which provides
     net world force and torque about the centre of mass, (N, 3) each, at a
     :class:`~rigid_sim.core.state.Snapshot`;
 ``torqued``
-    (N,) bool, the bodies any effect of the scene may torque.
+    (N,) bool, the bodies any effect of the scene may torque;
+``velocity_dependent``
+    bool, whether any effect's wrench depends on the momenta.
 
 To write a new method, subclass :class:`Integrator`, set ``name``, ``order`` and
 ``adaptive``, implement ``_step_impl`` and add the class to the registry in

@@ -19,6 +19,7 @@ class Tableau:
 
 
 FORWARD_EULER = Tableau(a=((),), b=(1.0,), c=(0.0,))
+EXPLICIT_MIDPOINT = Tableau(a=((), (0.5,)), b=(0.0, 1.0), c=(0.0, 0.5))
 CLASSICAL_RK4 = Tableau(
     a=((), (0.5,), (0.0, 0.5), (0.0, 0.0, 1.0)),
     b=(1 / 6, 1 / 3, 1 / 3, 1 / 6),

@@ -1,0 +1,124 @@
+"""Worlds built straight from the core, and references that do not use the core.
+
+The references are physics written out here in the tests' own terms: closed forms, and
+Newton-Euler equations (Euler's equations in body axes, ``dq/dt = q (omega_b, 0) / 2``)
+integrated by scipy's DOP853. Quaternions are ``(x, y, z, w)``, body to world.
+Imported by the test modules as ``import physics_cases`` (pytest puts ``test/`` on sys.path).
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
+
+from rigid_sim.core.integrators import REGISTRY
+from rigid_sim.core.state import RigidBodies, initial_state
+from rigid_sim.core.world import World
+
+REFERENCE_TOLERANCE = 1e-12  # DOP853 rtol = atol: far below every error a test asserts
+ADAPTIVE_INTERVAL = 0.05   # s between calls to an adaptive method; it picks its own substeps
+ADAPTIVE_TOLERANCE = 1e-10  # asked of adaptive methods in accuracy tests
+ADAPTIVE_ALLOWED = 1e-8     # error allowed them: global error builds up to ~10x the local target
+# Global error of a method of order p over a few periods: K (rate dt)^p, K measured <= 7
+# across the registry on the problems of these tests.
+ORDER_ERROR_CONSTANT = 20.0
+FIXED_STEP = sorted(name for name, cls in REGISTRY.items() if not cls.adaptive)
+# Methods accurate enough for tight comparisons at dt = 1e-3: order >= 4 or error-controlled.
+ACCURATE = sorted(name for name, cls in REGISTRY.items() if cls.adaptive or cls.order >= 4)
+
+
+def make_bodies(mass, inertia, com_in_body=None):
+    """Bodies named ``b0, b1, ...``.
+
+    Parameters
+    ----------
+    mass : (N,) kg
+    inertia : (N, 3, 3) kg m^2, about the centre of mass, body axes
+    com_in_body : (N, 3) m, centre of mass in body-frame coordinates (zeros if None)
+    """
+    mass = np.atleast_1d(np.asarray(mass, dtype=float))
+    inertia = np.asarray(inertia, dtype=float).reshape(-1, 3, 3)
+    com = np.zeros((mass.size, 3)) if com_in_body is None else com_in_body
+    names = tuple(f'b{i}' for i in range(mass.size))
+    return RigidBodies(names, mass, inertia, np.asarray(com, dtype=float).reshape(-1, 3))
+
+
+def make_world(bodies, origin, orientation, velocity, angular_velocity, effects=(),
+               integrator='rk4', tolerance=1e-6):
+    """World from the pose and twist of each body frame, (N, 3) / (N, 4), world axes."""
+    initial = initial_state(bodies, np.reshape(origin, (-1, 3)), np.reshape(orientation, (-1, 4)),
+                            np.reshape(velocity, (-1, 3)), np.reshape(angular_velocity, (-1, 3)))
+    return World(bodies, initial, effects, integrator=integrator, tolerance=tolerance)
+
+
+def advance(world, dt, duration):
+    """Step ``world`` by ``dt`` until ``duration`` seconds have passed; returns the world."""
+    steps = int(round(duration / dt))
+    assert abs(steps * dt - duration) < 1e-9 * max(duration, 1.0), 'dt must divide duration'
+    for _ in range(steps):
+        world.step(dt)
+    return world
+
+
+def step_for(name, fixed_dt):
+    """``fixed_dt`` for fixed-step methods; adaptive ones are asked for ADAPTIVE_INTERVAL."""
+    return ADAPTIVE_INTERVAL if REGISTRY[name].adaptive else fixed_dt
+
+
+def allowed_error(name, rate, dt):
+    """Relative error allowed ``name`` on a problem of fastest rate ``rate`` (1/s) at step dt."""
+    cls = REGISTRY[name]
+    return ADAPTIVE_ALLOWED if cls.adaptive else ORDER_ERROR_CONSTANT * (rate * dt) ** cls.order
+
+
+def body_angular_velocity(snapshot):
+    """(N, 3) angular velocity in body axes, ``R^T omega``, rad/s."""
+    return np.einsum('nji,nj->ni', snapshot.rotation, snapshot.angular_velocity)
+
+
+def quaternion_product(p, q):
+    """Hamilton product ``p q`` of two quaternions ``(x, y, z, w)``, (4,) each."""
+    pv, pw, qv, qw = p[:3], p[3], q[:3], q[3]
+    return np.append(pw * qv + qw * pv + np.cross(pv, qv), pw * qw - pv @ qv)
+
+
+def rotation_error(q, q_reference):
+    """Angle, rad, of the rotation taking ``q_reference`` to ``q``, (..., 4) each."""
+    return (Rotation.from_quat(q_reference).inv() * Rotation.from_quat(q)).magnitude()
+
+
+@dataclass(frozen=True)
+class SingleBody:
+    """One body, optionally on a zero-rest-length spring from a body point to a world anchor.
+
+    Spring force ``-k d - c d'`` with ``d`` the point minus the anchor; plus ``M g``.
+    """
+
+    mass: float                      # kg
+    inertia: np.ndarray              # (3, 3) kg m^2, about the centre of mass, body axes
+    lever: np.ndarray = field(default_factory=lambda: np.zeros(3))   # com to point, body, m
+    anchor: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world, m
+    stiffness: float = 0.0           # N/m
+    damping: float = 0.0             # N s/m
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))  # m/s^2
+
+    def slope(self, time, s):
+        """d/dt of ``s = [x, v, q, omega_b]`` (13,) from Newton's and Euler's equations."""
+        x, v, q, omega_b = s[:3], s[3:6], s[6:10], s[10:]
+        world_from_body = Rotation.from_quat(q).as_matrix()
+        lever = world_from_body @ self.lever
+        point_velocity = v + np.cross(world_from_body @ omega_b, lever)
+        spring = -self.stiffness * (x + lever - self.anchor) - self.damping * point_velocity
+        torque_body = np.cross(self.lever, world_from_body.T @ spring)
+        inertia = np.asarray(self.inertia)
+        omega_rate = np.linalg.solve(inertia, torque_body - np.cross(omega_b, inertia @ omega_b))
+        q_rate = 0.5 * quaternion_product(q, np.append(omega_b, 0.0))
+        return np.concatenate((v, spring / self.mass + self.gravity, q_rate, omega_rate))
+
+    def reference(self, x0, v0, q0, omega_body0, times):
+        """DOP853 solution at ``times`` (T,): x, v (T, 3), q (T, 4), omega_b (T, 3)."""
+        s0 = np.concatenate((x0, v0, q0, omega_body0))
+        solution = solve_ivp(self.slope, (0.0, times[-1]), s0, method='DOP853', t_eval=times,
+                             rtol=REFERENCE_TOLERANCE, atol=REFERENCE_TOLERANCE)
+        s = solution.y.T
+        return s[:, :3], s[:, 3:6], s[:, 6:10], s[:, 10:]

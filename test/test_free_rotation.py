@@ -1,0 +1,208 @@
+"""The exact torque-free flow against physics: Euler's equations, symmetric tops, invariants."""
+import functools
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from rigid_sim.core.integrators.free_rotation import torque_free_flow
+
+MOMENTS = np.array([1.0, 2.0, 3.0])
+START = np.array([0.1, -0.2, 0.3, 0.9]) / np.linalg.norm([0.1, -0.2, 0.3, 0.9])
+# Near the intermediate axis, and spinning about the minor and about the major axis.
+OMEGAS = ((0.1, 5.0, 0.1), (5.0, 0.1, 0.1), (0.1, 0.1, 5.0))
+DURATION = 20.0
+STEPS = 1000
+ANGLE_TOL = 1e-9        # rad, against a DOP853 reference at rtol = atol = 1e-12
+MOMENTUM_TOL = 1e-9     # relative
+
+
+def quat_mul(p, q):
+    """Hamilton product of scalar-last quaternions (x, y, z, w), broadcasting."""
+    pv, pw = p[..., :3], p[..., 3:]
+    qv, qw = q[..., :3], q[..., 3:]
+    return np.concatenate((pw * qv + qw * pv + np.cross(pv, qv),
+                           pw * qw - np.sum(pv * qv, axis=-1, keepdims=True)), axis=-1)
+
+
+def quat_angle(p, q):
+    """Angle of the rotation p^-1 q, rad (sign of the quaternion ignored)."""
+    relative = quat_mul(p * np.array([-1.0, -1.0, -1.0, 1.0]), q)
+    return 2.0 * np.arctan2(np.linalg.norm(relative[..., :3], axis=-1), np.abs(relative[..., 3]))
+
+
+def quat_rotate(q, v):
+    """R(q) v for quaternion(s) q and vector(s) v."""
+    pure = np.concatenate((v, np.zeros(v.shape[:-1] + (1,))), axis=-1)
+    conj = q * np.array([-1.0, -1.0, -1.0, 1.0])
+    return quat_mul(quat_mul(q, pure), conj)[..., :3]
+
+
+def axis_angle(axis, angle):
+    """Quaternion of a rotation by angle about a unit axis."""
+    return np.append(np.sin(0.5 * angle) * np.asarray(axis), np.cos(0.5 * angle))
+
+
+def euler_rhs(_, y, moments):
+    """Euler's equations for omega_body and dq/dt = 1/2 q (x) (omega_body, 0)."""
+    omega, q = y[:3], y[3:]
+    i1, i2, i3 = moments
+    w1, w2, w3 = omega
+    domega = [(i2 - i3) * w2 * w3 / i1, (i3 - i1) * w3 * w1 / i2, (i1 - i2) * w1 * w2 / i3]
+    return np.concatenate((domega, 0.5 * quat_mul(q, np.append(omega, 0.0))))
+
+
+@functools.lru_cache(maxsize=None)
+def reference(omega0):
+    """Body angular momentum and orientation at DURATION from a tight DOP853 solve."""
+    y0 = np.concatenate((omega0, START))
+    sol = solve_ivp(euler_rhs, (0.0, DURATION), y0, method='DOP853', rtol=1e-12, atol=1e-12,
+                    args=(MOMENTS,))
+    assert sol.success
+    return MOMENTS * sol.y[:3, -1], sol.y[3:, -1] / np.linalg.norm(sol.y[3:, -1])
+
+
+@pytest.mark.parametrize('omega0', OMEGAS)
+def test_one_long_step_matches_euler_equations(omega0):
+    """One call over 20 s reproduces the solution of Euler's equations (both regimes)."""
+    m_ref, q_ref = reference(omega0)
+    m, q = torque_free_flow(MOMENTS[None], (MOMENTS * omega0)[None], START[None], DURATION)
+    assert quat_angle(q_ref, q[0]) <= ANGLE_TOL
+    assert np.linalg.norm(m[0] - m_ref) <= MOMENTUM_TOL * np.linalg.norm(m_ref)
+
+
+@pytest.mark.parametrize('omega0', OMEGAS)
+def test_many_short_steps_match_euler_equations(omega0):
+    """1000 calls of 0.02 s compose to the same motion: the flow is a one-parameter group."""
+    m_ref, q_ref = reference(omega0)
+    m, q = (MOMENTS * omega0)[None], START[None]
+    for _ in range(STEPS):
+        m, q = torque_free_flow(MOMENTS[None], m, q, DURATION / STEPS)
+    assert quat_angle(q_ref, q[0]) <= ANGLE_TOL
+    assert np.linalg.norm(m[0] - m_ref) <= MOMENTUM_TOL * np.linalg.norm(m_ref)
+
+
+@pytest.mark.parametrize('order', [(0, 1, 2), (2, 0, 1), (1, 0, 2), (2, 1, 0)])
+def test_axis_order_and_batching_do_not_matter(order):
+    """Listing the principal axes in another order (with the quaternion relabelled to the same
+    physical body) and advancing all cases in one batch gives the same physical motion."""
+    order = list(order)
+    # Relabelling axes by a permutation matrix S (v_new = S v); flip one axis if det S = -1.
+    relabel = np.eye(3)[order]
+    relabel[0] *= np.linalg.det(relabel)
+    from scipy.spatial.transform import Rotation
+    body_from_new = Rotation.from_matrix(relabel.T).as_quat()
+    start = quat_mul(START, body_from_new)
+    moments = np.tile(MOMENTS[order], (len(OMEGAS), 1))
+    m0 = np.array([relabel @ (MOMENTS * np.array(w)) for w in OMEGAS])
+    m, q = torque_free_flow(moments, m0, np.tile(start, (len(OMEGAS), 1)), DURATION)
+    for i, omega0 in enumerate(OMEGAS):
+        m_ref, q_ref = reference(omega0)
+        assert np.linalg.norm(relabel.T @ m[i] - m_ref) <= MOMENTUM_TOL * np.linalg.norm(m_ref)
+        assert quat_angle(q_ref, quat_mul(q[i], body_from_new * [-1, -1, -1, 1])) <= ANGLE_TOL
+
+
+@pytest.mark.parametrize('moments, axis', [((1.0, 1.0, 3.0), 2), ((2.0, 2.0, 0.5), 2),
+                                           ((3.0, 1.5, 1.5), 0)])
+def test_symmetric_top_precesses_in_closed_form(moments, axis):
+    """Symmetric top: omega along the symmetry axis is constant, omega_perp turns about it in
+    the body at (I3 - I1)/I1 omega3, and the world symmetry axis precesses about the fixed L
+    at |L|/I1 keeping its angle to L."""
+    moments = np.array(moments)
+    perp = [i for i in range(3) if i != axis]
+    i_axis, i_perp = moments[axis], moments[perp[0]]
+    omega0 = np.zeros(3)
+    omega0[axis], omega0[perp[0]], omega0[perp[1]] = 2.0, 0.4, -0.3
+    m0 = moments * omega0
+    t = 7.3
+    m, q = torque_free_flow(moments[None], m0[None], START[None], t)
+    omega = m[0] / moments
+    body_rate = (i_axis - i_perp) / i_perp * omega0[axis]
+    # Right-handed about the symmetry axis in the order (perp0, perp1, axis) of a cyclic triple.
+    handed = 1.0 if (axis, perp[0], perp[1]) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1.0
+    c, s = np.cos(body_rate * t), handed * np.sin(body_rate * t)
+    expected = np.zeros(3)
+    expected[axis] = omega0[axis]
+    expected[perp[0]] = c * omega0[perp[0]] - s * omega0[perp[1]]
+    expected[perp[1]] = s * omega0[perp[0]] + c * omega0[perp[1]]
+    assert np.allclose(omega, expected, rtol=0.0, atol=1e-12 * np.linalg.norm(omega0))
+    l_world = quat_rotate(START, m0)
+    l_norm = np.linalg.norm(m0)
+    precession = axis_angle(l_world / l_norm, l_norm / i_perp * t)
+    e = np.eye(3)[axis]
+    expected_axis = quat_rotate(precession, quat_rotate(START, e))
+    assert np.allclose(quat_rotate(q[0], e), expected_axis, rtol=0.0, atol=1e-12)
+
+
+def test_sphere_turns_rigidly_about_l():
+    """A spherical body keeps m and rotates about the fixed L at |L|/I."""
+    m0 = np.array([0.3, -1.2, 0.7])
+    t = 3.1
+    m, q = torque_free_flow([[2.0, 2.0, 2.0]], m0[None], START[None], t)
+    assert np.allclose(m[0], m0, rtol=0.0, atol=1e-15)
+    turn = axis_angle(m0 / np.linalg.norm(m0), np.linalg.norm(m0) / 2.0 * t)
+    assert quat_angle(quat_mul(START, turn), q[0]) <= 1e-13
+
+
+def test_zero_momentum_leaves_the_body_alone():
+    """Without angular momentum nothing turns."""
+    m, q = torque_free_flow([[1.0, 2.0, 3.0], [2.0, 2.0, 2.0]], np.zeros((2, 3)),
+                            np.tile(START, (2, 1)), 5.0)
+    assert np.array_equal(m, np.zeros((2, 3)))
+    assert np.allclose(q, START, rtol=0.0, atol=1e-16)
+
+
+def test_intermediate_axis_equilibrium_spins_steadily():
+    """m exactly along the intermediate axis is an equilibrium: a steady spin at m2/I2."""
+    m, q = torque_free_flow(MOMENTS[None], [[0.0, 4.0, 0.0]], START[None], 2.5)
+    assert np.array_equal(m[0], [0.0, 4.0, 0.0])
+    assert quat_angle(quat_mul(START, axis_angle([0.0, 1.0, 0.0], 2.0 * 2.5)), q[0]) <= 1e-13
+
+
+def random_bodies(n, seed):
+    """Random moments (a few symmetric or on the separatrix), momenta and orientations."""
+    rng = np.random.default_rng(seed)
+    moments = rng.uniform(0.5, 3.0, (n, 3))
+    moments[0, 1] = moments[0, 0]
+    moments[1] = 1.7
+    m = rng.normal(size=(n, 3))
+    # Body 2 on the separatrix L^2 = 2 E I2 of I = (1, 2, 3), body 3 a hair off it.
+    moments[2:4] = MOMENTS
+    m[2:4] = [0.3, 1.0, 0.3 * np.sqrt(3.0)]
+    m[3, 2] *= 1.0 + 1e-13
+    q = rng.normal(size=(n, 4))
+    return moments, m, q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def test_invariants_are_conserved_over_many_calls():
+    """World L = R(q) m is constant, |q| = 1 and the kinetic energy is conserved; no NaN
+    appears on or next to the separatrix."""
+    moments, m, q = random_bodies(40, seed=7)
+    l_world = quat_rotate(q, m)
+    energy = np.sum(m ** 2 / moments, axis=1)
+    for _ in range(300):
+        m, q = torque_free_flow(moments, m, q, 0.037)
+    assert np.all(np.isfinite(m)) and np.all(np.isfinite(q))
+    scale = np.linalg.norm(l_world, axis=1)
+    assert np.all(np.linalg.norm(quat_rotate(q, m) - l_world, axis=1) <= 1e-12 * scale)
+    assert np.all(np.abs(np.linalg.norm(q, axis=1) - 1.0) <= 1e-13)
+    assert np.allclose(np.sum(m ** 2 / moments, axis=1), energy, rtol=1e-12, atol=0.0)
+
+
+def test_backward_step_undoes_forward_step():
+    """The exact flow is time-reversible: advancing by -dt returns to the start."""
+    moments, m0, q0 = random_bodies(20, seed=3)
+    m, q = torque_free_flow(moments, m0, q0, 1.3)
+    m, q = torque_free_flow(moments, m, q, -1.3)
+    assert np.allclose(m, m0, rtol=0.0, atol=1e-12 * np.abs(m0).max())
+    assert np.all(quat_angle(q0, q) <= 1e-12)
+
+
+def test_rejects_bad_shapes():
+    """Mismatched shapes and non-positive moments are refused with a reason."""
+    with pytest.raises(ValueError):
+        torque_free_flow(np.ones((2, 3)), np.ones((3, 3)), np.ones((2, 4)), 0.1)
+    with pytest.raises(ValueError):
+        torque_free_flow(np.ones((1, 3)), np.ones((1, 3)), np.ones((1, 3)), 0.1)
+    with pytest.raises(ValueError):
+        torque_free_flow([[0.0, 1.0, 1.0]], [[1.0, 0.0, 0.0]], [START], 0.1)
