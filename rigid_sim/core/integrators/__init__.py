@@ -5,7 +5,7 @@ from rigid_sim.core.integrators.splitting import DLM, DLM4, ExactSplit, ExactSpl
 from rigid_sim.core.integrators.symplectic_euler import SemiImplicitEuler
 
 # The node's default; chosen from the accuracy benchmark (docs/accuracy.md).
-DEFAULT_INTEGRATOR = 'rk4'
+DEFAULT_INTEGRATOR = 'exact_split'
 
 REGISTRY = {cls.name: cls for cls in (
     ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5, DLM, DLM4, ExactSplit, ExactSplit4)}
