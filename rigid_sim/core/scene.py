@@ -6,12 +6,9 @@ below as field tables (name -> (checker, default)). Every mistake is refused at 
 what it says or nothing at all. Only the effects a scene lists are built: an unlisted effect
 costs nothing while stepping.
 """
-import math
 import os
-import re
 from collections.abc import Hashable
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 import yaml
@@ -25,15 +22,11 @@ from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_pro
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
+from rigid_sim.core.scene_fields import (
+    ABSENT, choice, describe, fields, list_of, matrix, Mistake, non_negative, of_type, points,
+    positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
 
-# Body and point names become topic names and frame ids (~/<body>/wrench, <body>/<point>),
-# so they are REP-144 name tokens.
-NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*\Z')
-# Below this norm a quaternion has no direction left to normalise to.
-MIN_QUATERNION_NORM = 1e-9
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
-# Field-table defaults: the key must be given / the key stays out of the result when absent.
-REQUIRED, ABSENT = object(), object()
 
 
 class SceneError(ValueError):
@@ -42,14 +35,6 @@ class SceneError(ValueError):
     def __init__(self, path, key, reason):
         super().__init__(f'{path}: {key}: {reason}')
         self.path, self.key, self.reason = path, key, reason
-
-
-class _Mistake(Exception):
-    """A mistake at ``key``, raised below :func:`parse_scene`, which adds the file name."""
-
-    def __init__(self, key, reason):
-        super().__init__(key, reason)
-        self.key, self.reason = key or '(document)', reason
 
 
 @dataclass(frozen=True)
@@ -83,163 +68,37 @@ class Scene:
     effects: dict
 
 
-def _describe(value):
-    """Words for what YAML produced, for messages."""
-    if isinstance(value, bool) or value is None:
-        return {True: 'the boolean true', False: 'the boolean false', None: 'nothing'}[value]
-    if isinstance(value, str):
-        # YAML 1.1 reads an exponent without a dot (1e4) as text, like a quoted number.
-        hint = ' (write numbers unquoted, exponents with a dot: 1.0e4)'
-        return f'the text {value!r}' + (hint if re.fullmatch(r'[-+.\deE]+', value) else '')
-    if isinstance(value, (list, tuple)):
-        return f'a list of {len(value)}'
-    return 'a mapping' if isinstance(value, dict) else repr(value)
-
-
-def _fields(value, key, fields):
-    """A mapping checked against ``fields``: name -> (checker(value, key), default).
-
-    A missing key takes its default (then checked), or is refused (REQUIRED), or stays
-    missing (ABSENT). An unknown key is refused with the list of valid ones.
-    """
-    valid = tuple(fields)
-    if not isinstance(value, dict):
-        raise _Mistake(key, f'expected a mapping with keys {valid}, got {_describe(value)}')
-    prefix = f'{key}.' if key else ''
-    for name in value:
-        if name not in fields:
-            raise _Mistake(f'{prefix}{name}', f'unknown key {name!r}; valid keys: {valid}')
-    for name, (_, default) in fields.items():
-        if default is REQUIRED and name not in value:
-            raise _Mistake(f'{prefix}{name}', 'missing required key')
-    return {name: check(value.get(name, default), f'{prefix}{name}')
-            for name, (check, default) in fields.items() if name in value or default is not ABSENT}
-
-
-def _table(fields):
-    return lambda value, key: _fields(value, key, fields)
-
-
-def _list(check, what):
-    """A checker of a list whose items pass ``check``."""
-    def checked(value, key):
-        if not isinstance(value, list):
-            raise _Mistake(key, f'expected a list of {what}, got {_describe(value)}')
-        return tuple(check(item, f'{key}[{i}]') for i, item in enumerate(value))
-    return checked
-
-
-def _number(value, key, bound=None):
-    """A finite float; ``bound`` 'positive' or 'non-negative' adds a sign check."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise _Mistake(key, f'expected a number, got {_describe(value)}')
-    if not math.isfinite(value):
-        raise _Mistake(key, f'must be finite, got {value}')
-    if (bound == 'positive' and value <= 0) or (bound == 'non-negative' and value < 0):
-        raise _Mistake(key, f'must be {bound}, got {value}')
-    return float(value)
-
-
-def _raw(value, key):
-    return value
-
-
-_positive = partial(_number, bound='positive')
-_non_negative = partial(_number, bound='non-negative')
-
-
-def _vector(value, key, length=3, bound=None):
-    """A (length,) float array from a YAML list of finite numbers."""
-    if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise _Mistake(key, f'expected a list of {length} numbers, got {_describe(value)}')
-    return np.array([_number(item, f'{key}[{i}]', bound) for i, item in enumerate(value)])
-
-
-_size = partial(_vector, bound='positive')
-
-
-def _scale(value, key):
-    """Uniform (a number) or per-axis (3 numbers) mesh scale, positive."""
-    return _size(value, key) if isinstance(value, list) else _positive(value, key)
-
-
-def _quaternion(value, key):
-    """Unit (x, y, z, w): a non-unit quaternion is normalised, a zero one refused."""
-    q = _vector(value, key, 4)
-    norm = np.linalg.norm(q)
-    if norm < MIN_QUATERNION_NORM:
-        raise _Mistake(key, 'zero quaternion: no rotation to normalise')
-    return q / norm
-
-
-def _matrix(value, key):
-    if not isinstance(value, list) or len(value) != 3:
-        raise _Mistake(key, f'expected 3 rows of 3 numbers, got {_describe(value)}')
-    return np.array([_vector(row, f'{key}[{i}]') for i, row in enumerate(value)])
-
-
-def _token(value, key):
-    if not isinstance(value, str) or not NAME_TOKEN.match(value):
-        raise _Mistake(key, f'expected a name of letters, digits and _ not starting with a '
-                            f'digit (it becomes a topic and frame name), got {_describe(value)}')
-    return value
-
-
-def _choice(*valid):
-    def checked(value, key):
-        if value not in valid:
-            raise _Mistake(key, f'expected one of {valid}, got {_describe(value)}')
-        return value
-    return checked
-
-
-def _of_type(kind, what):
-    def checked(value, key):
-        # YAML booleans are Python ints: a bool passes only as a bool, and only a bool does.
-        if isinstance(value, bool) is not (kind is bool) or not isinstance(value, kind):
-            raise _Mistake(key, f'expected {what}, got {_describe(value)}')
-        return value
-    return checked
-
-
-def _points(value, key):
-    if not isinstance(value, dict):
-        raise _Mistake(key, f'expected a mapping of name: [x, y, z], got {_describe(value)}')
-    return {_token(name, f'{key}.{name}'): _vector(point, f'{key}.{name}')
-            for name, point in value.items()}
-
-
 SHAPES = {
-    'box': {'size': (_size, REQUIRED)},
-    'sphere': {'radius': (_positive, REQUIRED)},
-    'cylinder': {'radius': (_positive, REQUIRED), 'length': (_positive, REQUIRED)},
-    'mesh': {'file': (_of_type(str, 'a file name'), REQUIRED), 'scale': (_scale, 1.0)},
+    'box': {'size': (size, REQUIRED)},
+    'sphere': {'radius': (positive, REQUIRED)},
+    'cylinder': {'radius': (positive, REQUIRED), 'length': (positive, REQUIRED)},
+    'mesh': {'file': (of_type(str, 'a file name'), REQUIRED), 'scale': (scale, 1.0)},
 }
-INERTIA = {'method': (_choice(*INERTIA_METHODS), ABSENT),
-           'samples': (_of_type(int, 'a whole number of samples'), ABSENT),
-           'diagonal': (_vector, ABSENT), 'matrix': (_matrix, ABSENT)}
+INERTIA = {'method': (choice(*INERTIA_METHODS), ABSENT),
+           'samples': (of_type(int, 'a whole number of samples'), ABSENT),
+           'diagonal': (vector, ABSENT), 'matrix': (matrix, ABSENT)}
 ZERO = [0.0, 0.0, 0.0]
 # Shape and inertia arrive raw: their valid keys depend on their type, checked in _body.
-BODY = {'name': (_token, REQUIRED), 'shape': (_raw, REQUIRED),
-        'mass': (_positive, ABSENT), 'density': (_positive, ABSENT), 'inertia': (_raw, {}),
-        'pose': (_table({'position': (_vector, ZERO),
-                         'orientation': (_quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
-        'twist': (_table({'linear': (_vector, ZERO), 'angular': (_vector, ZERO)}), {}),
-        'points': (_points, {}), 'wrench_input': (_of_type(bool, 'true or false'), True)}
-SPRING = {'body': (_token, REQUIRED), 'stiffness': (_non_negative, REQUIRED),
-          'point': (_vector, ZERO), 'anchor': (_vector, ABSENT), 'other': (_token, ABSENT),
-          'other_point': (_vector, ABSENT), 'damping': (_non_negative, 0.0),
-          'rest_length': (_non_negative, 0.0)}
-EFFECTS = {'gravity': (_table({'acceleration': (_vector, REQUIRED)}), ABSENT),
-           'damping': (_table({'linear': (_non_negative, 0.0),
-                               'angular': (_non_negative, 0.0)}), ABSENT),
-           'springs': (_list(_table(SPRING), 'springs'), ABSENT)}
-SCENE = {'world_frame': (_token, 'world'),
-         'limits': (_table({'max_force': (_positive, DEFAULT_MAX_FORCE),
-                            'max_torque': (_positive, DEFAULT_MAX_TORQUE)}), {}),
-         'effects': (_table(EFFECTS), {}),
+BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
+        'mass': (positive, ABSENT), 'density': (positive, ABSENT), 'inertia': (raw, {}),
+        'pose': (table({'position': (vector, ZERO),
+                        'orientation': (quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
+        'twist': (table({'linear': (vector, ZERO), 'angular': (vector, ZERO)}), {}),
+        'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True)}
+SPRING = {'body': (token, REQUIRED), 'stiffness': (non_negative, REQUIRED),
+          'point': (vector, ZERO), 'anchor': (vector, ABSENT), 'other': (token, ABSENT),
+          'other_point': (vector, ABSENT), 'damping': (non_negative, 0.0),
+          'rest_length': (non_negative, 0.0)}
+EFFECTS = {'gravity': (table({'acceleration': (vector, REQUIRED)}), ABSENT),
+           'damping': (table({'linear': (non_negative, 0.0),
+                              'angular': (non_negative, 0.0)}), ABSENT),
+           'springs': (list_of(table(SPRING), 'springs'), ABSENT)}
+SCENE = {'world_frame': (token, 'world'),
+         'limits': (table({'max_force': (positive, DEFAULT_MAX_FORCE),
+                           'max_torque': (positive, DEFAULT_MAX_TORQUE)}), {}),
+         'effects': (table(EFFECTS), {}),
          # Raw here; _body checks each, as it needs the scene's directory.
-         'bodies': (_list(_raw, 'bodies'), REQUIRED)}
+         'bodies': (list_of(raw, 'bodies'), REQUIRED)}
 
 
 def _shape(value, key, base_dir):
@@ -247,43 +106,43 @@ def _shape(value, key, base_dir):
     kind = value.get('type') if isinstance(value, dict) else None
     if kind not in SHAPES:
         where = f'{key}.type' if isinstance(value, dict) else key
-        raise _Mistake(where, f'expected a shape type in {tuple(SHAPES)}, got '
-                              f'{_describe(kind if where != key else value)}')
-    shape = _fields(value, key, {'type': (_raw, REQUIRED), **SHAPES[kind]})
+        raise Mistake(where, f'expected a shape type in {tuple(SHAPES)}, got '
+                             f'{describe(kind if where != key else value)}')
+    shape = fields(value, key, {'type': (raw, REQUIRED), **SHAPES[kind]})
     if kind == 'mesh':
         shape['file'] = os.path.abspath(os.path.join(base_dir, shape['file']))
         if not os.path.isfile(shape['file']):
-            raise _Mistake(f'{key}.file', f'mesh not found: {shape["file"]} (a relative '
-                                          "path starts at the scene file's directory)")
+            raise Mistake(f'{key}.file', f'mesh not found: {shape["file"]} (a relative '
+                                         "path starts at the scene file's directory)")
     return shape
 
 
 def _inertia(value, key):
     """Validated inertia method; a diagonal or matrix without a method means 'given'."""
-    inertia = _fields(value, key, INERTIA)
+    inertia = fields(value, key, INERTIA)
     given = [name for name in ('diagonal', 'matrix') if name in inertia]
     method = inertia.setdefault('method', 'given' if given else 'exact')
     if (method == 'given') != (len(given) == 1):
-        raise _Mistake(key, "method 'given' takes exactly one of diagonal or matrix; "
-                            "other methods take neither")
+        raise Mistake(key, "method 'given' takes exactly one of diagonal or matrix; "
+                           "other methods take neither")
     if (method == 'sampling') != ('samples' in inertia):
-        raise _Mistake(f'{key}.samples', "method 'sampling' needs samples, others take none")
+        raise Mistake(f'{key}.samples', "method 'sampling' needs samples, others take none")
     if inertia.get('samples', 1) < 1:
-        raise _Mistake(f'{key}.samples', f'must be positive, got {inertia["samples"]}')
+        raise Mistake(f'{key}.samples', f'must be positive, got {inertia["samples"]}')
     for name in given:
         try:
             check_inertia(np.diag(inertia[name]) if name == 'diagonal' else inertia[name])
         except ValueError as error:
-            raise _Mistake(f'{key}.{name}', str(error)) from None
+            raise Mistake(f'{key}.{name}', str(error)) from None
     return inertia
 
 
 def _body(value, key, base_dir):
     """One :class:`BodySpec` from its scene entry."""
-    body = _fields(value, key, BODY)
+    body = fields(value, key, BODY)
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
-        raise _Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
+        raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
     shape = _shape(body['shape'], f'{key}.shape', base_dir)
     inertia = _inertia(body['inertia'], f'{key}.inertia')
     try:
@@ -291,7 +150,7 @@ def _body(value, key, base_dir):
     except (ValueError, OSError) as error:
         # Given tensors are checked already: what fails here is the mesh, or too few samples.
         blamed = 'inertia.samples' if inertia['method'] == 'sampling' else 'shape'
-        raise _Mistake(f'{key}.{blamed}', str(error)) from None
+        raise Mistake(f'{key}.{blamed}', str(error)) from None
     return BodySpec(
         name=body['name'], shape=shape, mass_properties=properties,
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
@@ -302,35 +161,35 @@ def _body(value, key, base_dir):
 def _bodies(entries, world_frame, base_dir):
     """All bodies, with unique names and point names that do not shadow a frame."""
     if not entries:
-        raise _Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
+        raise Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
     bodies = tuple(_body(entry, f'bodies[{i}]', base_dir) for i, entry in enumerate(entries))
     names = [body.name for body in bodies]
     for i, name in enumerate(names):
         if name in names[:i]:
-            raise _Mistake(f'bodies[{i}].name', f'duplicate body name {name!r} '
-                                                f'(also bodies[{names.index(name)}])')
+            raise Mistake(f'bodies[{i}].name', f'duplicate body name {name!r} '
+                                               f'(also bodies[{names.index(name)}])')
     frames = sorted(set(names) | {world_frame})
     for i, body in enumerate(bodies):
         for point in body.points:
             if point in frames:
-                raise _Mistake(f'bodies[{i}].points.{point}', f'point name {point!r} is '
-                               f'already a frame name (bodies and world_frame: {frames})')
+                raise Mistake(f'bodies[{i}].points.{point}', f'point name {point!r} is '
+                              f'already a frame name (bodies and world_frame: {frames})')
     return bodies
 
 
 def _spring(spring, key, names):
     """A :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
     if ('anchor' in spring) == ('other' in spring):
-        raise _Mistake(key, 'give exactly one of anchor (a world point) or other (a body)')
+        raise Mistake(key, 'give exactly one of anchor (a world point) or other (a body)')
     if 'other_point' in spring and 'other' not in spring:
-        raise _Mistake(f'{key}.other_point', 'other_point needs other (a body)')
+        raise Mistake(f'{key}.other_point', 'other_point needs other (a body)')
     for end in ('body', 'other'):
         if end in spring and spring[end] not in names:
-            raise _Mistake(f'{key}.{end}', f'no body named {spring[end]!r}; bodies: {names}')
+            raise Mistake(f'{key}.{end}', f'no body named {spring[end]!r}; bodies: {names}')
     index = {end: names.index(spring[end]) if end in spring else None
              for end in ('body', 'other')}
     if index['other'] == index['body']:
-        raise _Mistake(f'{key}.other', 'a spring from a body to itself exerts no net force')
+        raise Mistake(f'{key}.other', 'a spring from a body to itself exerts no net force')
     if index['other'] is not None:
         spring.setdefault('other_point', np.zeros(3))
     return SpringSpec(**{**spring, **index})
@@ -343,7 +202,7 @@ def parse_scene(data, path='<memory>', base_dir='.'):
     :class:`SceneError` naming ``path``, the key and the reason for any mistake.
     """
     try:
-        scene = _fields(data, '', SCENE)
+        scene = fields(data, '', SCENE)
         bodies = _bodies(scene['bodies'], scene['world_frame'], base_dir)
         effects = dict(scene['effects'])
         names = [body.name for body in bodies]
@@ -351,7 +210,7 @@ def parse_scene(data, path='<memory>', base_dir='.'):
                         for i, spring in enumerate(effects.pop('springs', ())))
         if springs:  # an empty list lists no spring: nothing to build
             effects['springs'] = springs
-    except _Mistake as mistake:
+    except Mistake as mistake:
         raise SceneError(path, mistake.key, mistake.reason) from None
     return Scene(path=str(path), world_frame=scene['world_frame'], bodies=bodies,
                  effects=effects, **scene['limits'])

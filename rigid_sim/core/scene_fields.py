@@ -1,0 +1,152 @@
+"""Checkers for scene fields: each takes (value, key) and returns the value or raises Mistake.
+
+A field table maps a key to (checker, default); :func:`fields` walks one, so the scene
+format is written down once, as data, in :mod:`rigid_sim.core.scene`.
+"""
+import math
+import re
+from functools import partial
+
+import numpy as np
+
+# Body and point names become topic names and frame ids (~/<body>/wrench, <body>/<point>),
+# so they are REP-144 name tokens.
+NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*\Z')
+# Below this norm a quaternion has no direction left to normalise to.
+MIN_QUATERNION_NORM = 1e-9
+# Field-table defaults: the key must be given / the key stays out of the result when absent.
+REQUIRED, ABSENT = object(), object()
+
+
+class Mistake(Exception):
+    """A mistake at ``key``, raised below :func:`parse_scene`, which adds the file name."""
+
+    def __init__(self, key, reason):
+        super().__init__(key, reason)
+        self.key, self.reason = key or '(document)', reason
+
+
+def describe(value):
+    """Words for what YAML produced, for messages."""
+    if isinstance(value, bool) or value is None:
+        return {True: 'the boolean true', False: 'the boolean false', None: 'nothing'}[value]
+    if isinstance(value, str):
+        # YAML 1.1 reads an exponent without a dot (1e4) as text, like a quoted number.
+        hint = ' (write numbers unquoted, exponents with a dot: 1.0e4)'
+        return f'the text {value!r}' + (hint if re.fullmatch(r'[-+.\deE]+', value) else '')
+    if isinstance(value, (list, tuple)):
+        return f'a list of {len(value)}'
+    return 'a mapping' if isinstance(value, dict) else repr(value)
+
+
+def fields(value, key, spec):
+    """A mapping checked against ``spec``: name -> (checker(value, key), default).
+
+    A missing key takes its default (then checked), or is refused (REQUIRED), or stays
+    missing (ABSENT). An unknown key is refused with the list of valid ones.
+    """
+    valid = tuple(spec)
+    if not isinstance(value, dict):
+        raise Mistake(key, f'expected a mapping with keys {valid}, got {describe(value)}')
+    prefix = f'{key}.' if key else ''
+    for name in value:
+        if name not in spec:
+            raise Mistake(f'{prefix}{name}', f'unknown key {name!r}; valid keys: {valid}')
+    for name, (_, default) in spec.items():
+        if default is REQUIRED and name not in value:
+            raise Mistake(f'{prefix}{name}', 'missing required key')
+    return {name: check(value.get(name, default), f'{prefix}{name}')
+            for name, (check, default) in spec.items() if name in value or default is not ABSENT}
+
+
+def table(spec):
+    return lambda value, key: fields(value, key, spec)
+
+
+def list_of(check, what):
+    """A checker of a list whose items pass ``check``."""
+    def checked(value, key):
+        if not isinstance(value, list):
+            raise Mistake(key, f'expected a list of {what}, got {describe(value)}')
+        return tuple(check(item, f'{key}[{i}]') for i, item in enumerate(value))
+    return checked
+
+
+def number(value, key, bound=None):
+    """A finite float; ``bound`` 'positive' or 'non-negative' adds a sign check."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise Mistake(key, f'expected a number, got {describe(value)}')
+    if not math.isfinite(value):
+        raise Mistake(key, f'must be finite, got {value}')
+    if (bound == 'positive' and value <= 0) or (bound == 'non-negative' and value < 0):
+        raise Mistake(key, f'must be {bound}, got {value}')
+    return float(value)
+
+
+def raw(value, key):
+    return value
+
+
+positive = partial(number, bound='positive')
+non_negative = partial(number, bound='non-negative')
+
+
+def vector(value, key, length=3, bound=None):
+    """A (length,) float array from a YAML list of finite numbers."""
+    if not isinstance(value, (list, tuple)) or len(value) != length:
+        raise Mistake(key, f'expected a list of {length} numbers, got {describe(value)}')
+    return np.array([number(item, f'{key}[{i}]', bound) for i, item in enumerate(value)])
+
+
+size = partial(vector, bound='positive')
+
+
+def scale(value, key):
+    """Uniform (a number) or per-axis (3 numbers) mesh scale, positive."""
+    return size(value, key) if isinstance(value, list) else positive(value, key)
+
+
+def quaternion(value, key):
+    """Unit (x, y, z, w): a non-unit quaternion is normalised, a zero one refused."""
+    q = vector(value, key, 4)
+    norm = np.linalg.norm(q)
+    if norm < MIN_QUATERNION_NORM:
+        raise Mistake(key, 'zero quaternion: no rotation to normalise')
+    return q / norm
+
+
+def matrix(value, key):
+    if not isinstance(value, list) or len(value) != 3:
+        raise Mistake(key, f'expected 3 rows of 3 numbers, got {describe(value)}')
+    return np.array([vector(row, f'{key}[{i}]') for i, row in enumerate(value)])
+
+
+def token(value, key):
+    if not isinstance(value, str) or not NAME_TOKEN.match(value):
+        raise Mistake(key, f'expected a name of letters, digits and _ not starting with a '
+                           f'digit (it becomes a topic and frame name), got {describe(value)}')
+    return value
+
+
+def choice(*valid):
+    def checked(value, key):
+        if value not in valid:
+            raise Mistake(key, f'expected one of {valid}, got {describe(value)}')
+        return value
+    return checked
+
+
+def of_type(kind, what):
+    def checked(value, key):
+        # YAML booleans are Python ints: a bool passes only as a bool, and only a bool does.
+        if isinstance(value, bool) is not (kind is bool) or not isinstance(value, kind):
+            raise Mistake(key, f'expected {what}, got {describe(value)}')
+        return value
+    return checked
+
+
+def points(value, key):
+    if not isinstance(value, dict):
+        raise Mistake(key, f'expected a mapping of name: [x, y, z], got {describe(value)}')
+    return {token(name, f'{key}.{name}'): vector(point, f'{key}.{name}')
+            for name, point in value.items()}
