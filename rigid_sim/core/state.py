@@ -50,6 +50,16 @@ class RigidBodies:
         return np.linalg.inv(self.inertia_body)
 
     @cached_property
+    def inertia_body_inv_rows(self):
+        """(3, 3, N) ``I_body^-1``, one row per matrix entry (component-major)."""
+        return np.ascontiguousarray(self.inertia_body_inv.transpose(1, 2, 0))
+
+    @cached_property
+    def inverse_mass(self):
+        """(N,) ``1 / M``, 1/kg."""
+        return 1.0 / np.asarray(self.mass, dtype=float)
+
+    @cached_property
     def principal_moments(self):
         """(N, 3) principal moments and (N, 3, 3) body-from-principal rotations.
 
@@ -97,45 +107,83 @@ class Snapshot:
 
     Effects and diagnostics share one snapshot per integrator stage, so ``R`` and
     ``omega`` are not recomputed by every effect that needs them.
+
+    Parameters
+    ----------
+    bodies : RigidBodies
+    y : (N, 13) float
+        Packed state; integrators pass the transpose of their component-major (13, N) rows.
+    time : float, s
+    rotation : (N, 3, 3) float, optional
+        ``R`` if the caller has it.
+    rotation_rows : (3, 3, N) float, optional
+        ``R`` component-major, as integrators hold it.
+    completion : callable, optional
+        Finishes ``y`` in place the first time anyone reads it: integrators that work in
+        body axes fill world ``L`` only for effects that read the state.
     """
 
-    def __init__(self, bodies, y, time, rotation=None):
+    def __init__(self, bodies, y, time, rotation=None, rotation_rows=None, completion=None):
         self.bodies = bodies
-        self.y = y
+        self._y = y
+        self._completion = completion
         self.time = time
         if rotation is not None:  # the caller already has R: seed the cache
-            self.__dict__['rotation'] = rotation
+            rotation_rows = np.asarray(rotation).transpose(1, 2, 0)
+        if rotation_rows is not None:
+            self.__dict__['rotation_rows'] = rotation_rows
+
+    @property
+    def y(self):
+        """(N, 13) packed state [x, q, P, L]."""
+        if self._completion is not None:
+            completion, self._completion = self._completion, None
+            completion()
+        return self._y
 
     @cached_property
+    def rotation_rows(self):
+        """(3, 3, N) ``R``, body to world, one row per matrix entry."""
+        return rotation.matrix_rows(self.y.T[ORIENTATION])
+
+    @property
     def rotation(self):
-        """(N, 3, 3) ``R``, body to world."""
-        return rotation.to_matrix(self.y[:, ORIENTATION])
+        """(N, 3, 3) ``R``, body to world (a view of ``rotation_rows``)."""
+        return self.rotation_rows.transpose(2, 0, 1)
+
+    def to_world(self, vectors):
+        """``R v`` of body-axes vectors ``(K, 3, N)`` -> world axes ``(K, 3, N)``."""
+        return np.einsum('ijn,kjn->kin', self.rotation_rows, vectors)
 
     @cached_property
     def velocity(self):
         """(N, 3) centre-of-mass velocity ``v = P / M``, world, m/s."""
-        return self.y[:, LINEAR_MOMENTUM] / self.bodies.mass[:, None]
+        return (self.y.T[LINEAR_MOMENTUM] * self.bodies.inverse_mass).T
 
     @cached_property
     def angular_velocity(self):
         """(N, 3) ``omega = R I_body^-1 R^T L``, world, rad/s."""
-        body_l = rotation.rotate_inverse(self.rotation, self.y[:, ANGULAR_MOMENTUM])
-        return rotation.rotate(self.rotation, rotation.rotate(self.bodies.inertia_body_inv, body_l))
+        matrices = self.rotation_rows
+        body_l = rotation.rotate_inverse_rows(matrices, self.y.T[ANGULAR_MOMENTUM])
+        body_omega = rotation.rotate_rows(self.bodies.inertia_body_inv_rows, body_l)
+        return rotation.rotate_rows(matrices, body_omega).T
 
     @cached_property
     def com_offset(self):
         """(N, 3) ``R c``: from the body-frame origin to the centre of mass, world, m."""
-        return rotation.rotate(self.rotation, self.bodies.com_in_body)
+        return rotation.rotate_rows(self.rotation_rows, self.bodies.com_in_body.T).T
 
     def point_world(self, body_index, point_body):
         """World position of body-frame points: ``x + R (p - c)``, (K,) and (K, 3) -> (K, 3)."""
-        lever = point_body - self.bodies.com_in_body[body_index]
-        return self.y[body_index, POSITION] + rotation.rotate(self.rotation[body_index], lever)
+        lever = (point_body - self.bodies.com_in_body[body_index]).T
+        turned = rotation.rotate_rows(self.rotation_rows[:, :, body_index], lever)
+        return self.y[body_index, POSITION] + turned.T
 
     def point_velocity(self, body_index, point_world):
         """Velocity of material points: ``v + omega x (p - x)``, (K,), (K, 3) -> (K, 3)."""
-        lever = point_world - self.y[body_index, POSITION]
-        return self.velocity[body_index] + np.cross(self.angular_velocity[body_index], lever)
+        lever = (point_world - self.y[body_index, POSITION]).T
+        spin = rotation.cross_rows(self.angular_velocity[body_index].T, lever)
+        return self.velocity[body_index] + spin.T
 
     def body_frame_pose(self):
         """Origin (N, 3) and orientation (N, 4) of each body frame."""
@@ -143,8 +191,8 @@ class Snapshot:
 
     def body_frame_twist(self):
         """Velocity of each body-frame origin and angular velocity, world axes, (N, 3) each."""
-        origin_velocity = self.velocity - np.cross(self.angular_velocity, self.com_offset)
-        return origin_velocity, self.angular_velocity
+        spin = rotation.cross_rows(self.angular_velocity.T, self.com_offset.T)
+        return self.velocity - spin.T, self.angular_velocity
 
     def kinetic_energy(self):
         """(N,) ``P.P / 2M + omega.L / 2``, J."""

@@ -45,7 +45,8 @@ class AppliedWrenches:
         self.max_torque = float(max_torque)
         self._held = {}
         count = bodies.count
-        self._sums = {'world': np.zeros((count, 6)), 'body': np.zeros((count, 6))}
+        # Held sums as rows (2, 3, N): [force, torque], component-major like the integrators.
+        self._sums = {'world': np.zeros((2, 3, count)), 'body': np.zeros((2, 3, count))}
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
         self.velocity_dependent = False
@@ -107,11 +108,13 @@ class AppliedWrenches:
         at_points = [w for w in self._held.values() if w.frame == 'world_point']
         for held in self._held.values():
             sums = self._sums['body' if held.frame == 'body' else 'world']
-            sums[held.body] += np.concatenate((held.force, held.torque))
+            sums[:, :, held.body] += (held.force, held.torque)
         self._point_body = np.array([w.body for w in at_points], dtype=int)
         self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3)
         self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3)
         self._next_expiry = min((w.expires for w in self._held.values()), default=np.inf)
+        self._any_world = any(w.frame != 'body' for w in self._held.values())
+        self._any_body = any(w.frame == 'body' for w in self._held.values())
 
     @property
     def held(self):
@@ -119,9 +122,15 @@ class AppliedWrenches:
         return dict(self._held)
 
     def accumulate(self, snapshot, force, torque):
-        world, body = self._sums['world'], self._sums['body']
-        force += world[:, :3] + rotation.rotate(snapshot.rotation, body[:, :3])
-        torque += world[:, 3:] + rotation.rotate(snapshot.rotation, body[:, 3:])
+        # Skipping empty sums changes no number: it only spares the idle case its cost.
+        if self._any_body:
+            turned = snapshot.to_world(self._sums['body'])
+            force += turned[0].T
+            torque += turned[1].T
+        if self._any_world:
+            world = self._sums['world']
+            force += world[0].T
+            torque += world[1].T
         if self._point_body.size:
             lever = rotation.rotate(snapshot.rotation[self._point_body], self._point_lever)
             np.add.at(torque, self._point_body, np.cross(lever, self._point_force))

@@ -9,7 +9,8 @@ class Gravity:
 
     def __init__(self, bodies, acceleration):
         self.acceleration = np.asarray(acceleration, dtype=float).reshape(3)
-        self._weight = bodies.mass[:, None] * self.acceleration  # (N, 3) N, precomputed
+        # (N, 3) N, precomputed; a view of (3, N) rows, the layout integrators accumulate in.
+        self._weight = (self.acceleration[:, None] * bodies.mass).T
         self.torqued = np.zeros(bodies.count, dtype=bool)
         self.velocity_dependent = False
 

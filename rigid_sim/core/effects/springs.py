@@ -46,9 +46,49 @@ class Springs:
             [s.anchor if s.other is None else np.zeros(3) for s in specs],
             dtype=float).reshape(-1, 3)
         self.velocity_dependent = bool(np.any(self._damping != 0.0))
+        self._inverse_mass = self._inverse_effective_mass(bodies)
         self.torqued = np.zeros(bodies.count, dtype=bool)
         self.torqued[self._body] = True
         self.torqued[self._other[to_body]] = True
+
+    def _inverse_effective_mass(self, bodies):
+        """(S,) 1/kg: an upper bound on how fast each spring's ends accelerate per newton.
+
+        A force ``f`` at lever ``r`` from a centre of mass accelerates that point by at most
+        ``|f| (1/M + |r|^2 / I_min)``; a spring between bodies moves both ends.
+        """
+        moments = bodies.principal_moments[0]
+
+        def end(body, point):
+            lever = point - bodies.com_in_body[body]
+            return 1.0 / bodies.mass[body] + np.sum(lever ** 2, axis=1) / moments[body, 0]
+
+        second = np.where(self._to_body, end(self._other, self._other_point), 0.0)
+        return end(self._body, self._point) + second
+
+    def natural_frequency(self):
+        """(S,) rad/s, an upper bound on each spring's angular frequency ``sqrt(k / m_eff)``.
+
+        Exact for a spring at the centre of mass of one body held by a fixed anchor.
+        """
+        return np.sqrt(self._stiffness * self._inverse_mass)
+
+    def damping_rate(self):
+        """(S,) 1/s, an upper bound on each damper's decay rate ``c / m_eff``."""
+        return self._damping * self._inverse_mass
+
+    def fastest_rate(self):
+        """1/s, the fastest rate of the springs: the time step must resolve it.
+
+        Springs sharing a body add their squared frequencies (parallel springs); a damper
+        contributes its decay rate. 0 without springs.
+        """
+        if not self._stiffness.size:
+            return 0.0
+        ends = np.concatenate((self._body, self._other[self._to_body]))
+        squared = self.natural_frequency() ** 2
+        per_body = np.bincount(ends, weights=np.concatenate((squared, squared[self._to_body])))
+        return float(max(np.sqrt(per_body.max()), self.damping_rate().max()))
 
     def _ends(self, snapshot):
         """World positions and velocities of both ends, (S, 3) each."""

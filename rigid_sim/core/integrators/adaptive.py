@@ -9,8 +9,7 @@ import numpy as np
 from scipy.integrate import RK45
 
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.formulations import BodyMomentum
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM
+from rigid_sim.core.integrators.formulations import INNER_P, INNER_X, INNER_L, BodyMomentum
 
 
 class Dopri5(Integrator):
@@ -27,34 +26,35 @@ class Dopri5(Integrator):
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)
         self._step_size = None
+        self._formulation = BodyMomentum(self)
         bodies = self.bodies
         self._inertia_scale = np.trace(bodies.inertia_body, axis1=1, axis2=2)  # kg m^2
         self._length = np.sqrt(self._inertia_scale / bodies.mass)   # radius of gyration, m
 
     def _scale(self, z, dt):
-        """Per-component size (N, 13): lengths, 1 for q, momenta of the body's own scale."""
-        momentum = np.linalg.norm(z[:, LINEAR_MOMENTUM], axis=1)
-        angular = np.linalg.norm(z[:, ANGULAR_MOMENTUM], axis=1)
+        """Per-component size (13, N) of internal rows ``[L_b, x, q, P]``: lengths, 1 for q,
+        momenta of the body's own scale."""
+        momentum = np.linalg.norm(z[INNER_P], axis=0)
+        angular = np.linalg.norm(z[INNER_L], axis=0)
         # A body at rest still has a natural momentum: moving its own size in one step.
-        momentum_scale = np.maximum(momentum, self.bodies.mass * self._length / dt)
-        angular_scale = np.maximum(angular, self._inertia_scale / dt)
-        columns = (
-            np.repeat(self._length[:, None], 3, axis=1),
-            np.ones((len(z), 4)),
-            np.repeat(momentum_scale[:, None], 3, axis=1),
-            np.repeat(angular_scale[:, None], 3, axis=1),
-        )
-        return np.concatenate(columns, axis=1)
+        scale = np.ones_like(z)
+        scale[INNER_L] = np.maximum(angular, self._inertia_scale / dt)
+        scale[INNER_X] = self._length
+        scale[INNER_P] = np.maximum(momentum, self.bodies.mass * self._length / dt)
+        return scale
 
-    def _step_impl(self, y, time, dt):
-        z = BodyMomentum.to_internal(self.bodies, y)
+    def _step_impl(self, rows, time, dt):
+        f = self._formulation
+        z = f.to_internal(rows)
         shape = z.shape
+        slope_rows = np.empty(shape)
 
         def slope(t, flat):
-            return BodyMomentum.derivative(self, flat.reshape(shape), t).ravel()
+            f.state[...] = flat.reshape(shape)
+            return f.slope(t, out=slope_rows).ravel().copy()
 
         end = time + dt
-        solver = RK45(slope, time, z.ravel(), end, rtol=self.tolerance,
+        solver = RK45(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
                       atol=self.tolerance * self._scale(z, dt).ravel(),
                       first_step=min(self._step_size or dt, end - time))
         self.last_substeps = 0
@@ -65,4 +65,4 @@ class Dopri5(Integrator):
                 raise FloatingPointError(f'dopri5 failed: {message}')
         # The step the error estimate proposes next, not the last one cut short by `end`.
         self._step_size = solver.h_abs
-        return BodyMomentum.to_public(self.bodies, solver.y.reshape(shape))
+        return f.to_public(solver.y.reshape(shape))

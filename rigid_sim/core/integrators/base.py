@@ -5,9 +5,9 @@ by ``dt``. It is built for a *system*, which provides
 
 ``bodies``
     the :class:`~rigid_sim.core.state.RigidBodies`;
-``wrench(snapshot)``
-    net world force and torque about the centre of mass, (N, 3) each, at a
-    :class:`~rigid_sim.core.state.Snapshot`;
+``effects``
+    the effects the scene lists, each with ``accumulate(snapshot, force, torque)``
+    (see :mod:`rigid_sim.core.effects`);
 ``torqued``
     (N,) bool, the bodies any effect of the scene may torque;
 ``velocity_dependent``
@@ -17,6 +17,12 @@ To write a new method, subclass :class:`Integrator`, set ``name``, ``order`` and
 ``adaptive``, implement ``_step_impl`` and add the class to the registry in
 ``integrators/__init__.py``. ``step`` owns the bookkeeping: it keeps quaternions unit and
 counts right-hand-side evaluations. The state given to ``step`` is never modified.
+
+Inside, states are component-major: ``rows`` (13, N) is ``y`` transposed, so each component
+of every body is one contiguous row and one numpy call advances all bodies. ``_step_impl``
+gets ``y.T`` (a view it must not write) and returns new C-contiguous rows; ``step`` returns
+their transpose, an (N, 13) view, so callers index ``y[:, 0:3]`` as before. At large N a
+fresh temporary costs page faults, so the hot paths write into buffers kept between steps.
 """
 import numpy as np
 
@@ -37,22 +43,41 @@ class Integrator:
         self.tolerance = float(tolerance)
         self.evaluations = 0     # wrench evaluations since construction
         self.last_substeps = 1   # internal steps the last call took (adaptive methods)
+        # Net force and torque rows, refilled by every wrench evaluation.
+        self._wrench = np.empty((6, self.bodies.count))
 
     def step(self, y, time, dt):
-        """State after ``dt`` seconds from ``y`` at ``time``; ``y`` is left untouched."""
-        y_next = self._step_impl(y, time, dt)
-        y_next[:, ORIENTATION] = rotation.normalize(y_next[:, ORIENTATION])
-        return y_next
+        """State (N, 13) ``dt`` seconds after ``y`` (N, 13) at ``time``; ``y`` stays as it is."""
+        rows = self._step_impl(np.asarray(y).T, time, dt)
+        rotation.normalize_rows(rows[ORIENTATION], out=rows[ORIENTATION])
+        return rows.T
 
-    def wrench(self, y, time, matrices=None):
-        """Net force and torque (N, 3) on every body at state ``y``."""
+    def wrench_rows(self, rows, time, rotation_rows=None, completion=None):
+        """Net world force and torque about the centre of mass at state ``rows``.
+
+        Parameters
+        ----------
+        rows : (13, N) float, component-major state [x, q, P, L]
+        time : float, s
+        rotation_rows : (3, 3, N) float, optional, ``R`` if the caller has it
+        completion : callable, optional, finishes ``rows`` when an effect reads them
+            (see :class:`~rigid_sim.core.state.Snapshot`)
+
+        Returns
+        -------
+        force, torque : (3, N) float each, N and N m, world axes; rows of one buffer that the
+            next evaluation overwrites (copy them to keep them).
+        """
         self.evaluations += 1
-        return self.system.wrench(Snapshot(self.bodies, y, time, matrices))
+        wrench = self._wrench
+        wrench.fill(0.0)
+        force, torque = wrench[:3], wrench[3:]
+        snapshot = Snapshot(self.bodies, rows.T, time, rotation_rows=rotation_rows,
+                            completion=completion)
+        for effect in self.system.effects:
+            effect.accumulate(snapshot, force.T, torque.T)
+        return force, torque
 
-    def _step_impl(self, y, time, dt):
+    def _step_impl(self, rows, time, dt):
+        """New C-contiguous rows (13, N) ``dt`` after ``rows`` (13, N), which stay untouched."""
         raise NotImplementedError
-
-
-def omega_quaternion(omega):
-    """Pure quaternions ``(omega, 0)``, (N, 3) -> (N, 4)."""
-    return np.concatenate((omega, np.zeros((omega.shape[0], 1))), axis=1)

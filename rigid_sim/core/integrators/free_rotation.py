@@ -39,6 +39,32 @@ SWAP_MAJOR_MINOR = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]
 # Half-turn about axis 3: makes m1 >= 0 so u0 = F(am0) needs no period (K may be infinite).
 HALF_TURN_Z = np.diag([-1.0, -1.0, 1.0])
 AXES = np.eye(3)
+# Entries of a signed permutation matrix, each in {-1, 0, 1}, read as a base-3 number (a key).
+_KEY_DIGITS = 3 ** np.arange(9)
+
+
+def _signed_permutation_quaternions():
+    """Table: key of each proper signed permutation matrix -> its quaternion (x, y, z, w).
+
+    The working frames are these 24 matrices only, so one lookup replaces a general (and,
+    per call, ~100x dearer) matrix-to-quaternion conversion.
+    """
+    permutations = np.array([np.eye(3)[list(p)] for p in np.ndindex(3, 3, 3)
+                             if len(set(p)) == 3])
+    signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T
+    frames = (permutations[:, None] * signs[None, :, :, None]).reshape(-1, 3, 3)
+    frames = frames[np.linalg.det(frames) > 0.0]
+    table = np.full((3 ** 9, 4), np.nan)
+    table[_frame_keys(frames)] = Rotation.from_matrix(frames).as_quat()
+    return table
+
+
+def _frame_keys(frames):
+    """Keys (N,) int of (N, 3, 3) signed permutation matrices."""
+    return (np.rint(frames.reshape(-1, 9)) + 1.0).astype(int) @ _KEY_DIGITS
+
+
+_FRAME_QUATERNIONS = _signed_permutation_quaternions()
 
 
 def torque_free_flow(moments, angular_momentum_body, orientation, dt):
@@ -84,10 +110,12 @@ def torque_free_flow(moments, angular_momentum_body, orientation, dt):
         symmetric, axis, i_axis, i_perp = _classify(moments / i_scale[:, None], m_unit)
         sym = moving & symmetric
         ell = moving & ~symmetric
-        m_next[sym], step[sym] = _axisymmetric(
-            axis[sym], i_axis[sym], i_perp[sym], m_unit[sym], time[sym])
-        m_next[ell], step[ell] = _asymmetric(
-            moments[ell] / i_scale[ell, None], m_unit[ell], time[ell])
+        if np.any(sym):   # an empty branch would still cost its ~50 numpy calls
+            m_next[sym], step[sym] = _axisymmetric(
+                axis[sym], i_axis[sym], i_perp[sym], m_unit[sym], time[sym])
+        if np.any(ell):
+            m_next[ell], step[ell] = _asymmetric(
+                moments[ell] / i_scale[ell, None], m_unit[ell], time[ell])
         m_new[moving] = m_next[moving] * safe[moving]
         q_new[moving] = rotation.multiply(q[moving], step[moving])
     return m_new, rotation.normalize(q_new)
@@ -159,7 +187,7 @@ def _asymmetric(moments, m, time):
     frame, i_w, m_w = _working_frame(moments, m)
     m_w_new, core = _elliptic_working(i_w, m_w, time)
     m_new = np.einsum('nji,nj->ni', frame, m_w_new)
-    p = Rotation.from_matrix(frame).as_quat()
+    p = _FRAME_QUATERNIONS[_frame_keys(frame)]
     step = rotation.multiply(rotation.multiply(rotation.conjugate(p), core), p)
     return m_new, step
 

@@ -5,6 +5,8 @@ A method is data: its tableau and the formulation it differentiates
 """
 from dataclasses import dataclass
 
+import numpy as np
+
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.formulations import BodyMomentum, WorldMomentum
 
@@ -28,24 +30,42 @@ CLASSICAL_RK4 = Tableau(
 
 
 class ExplicitRungeKutta(Integrator):
-    """Integrate ``formulation.derivative`` with the stages of ``tableau``."""
+    """Integrate ``formulation.slope`` with the stages of ``tableau``.
+
+    Slopes live in one (stages, 13, N) array so that each stage's combination of earlier
+    slopes is a single ``einsum`` call whatever the number of bodies.
+    """
 
     tableau = None
     formulation = None
 
-    def _step_impl(self, y, time, dt):
-        f = self.formulation
-        z = f.to_internal(self.bodies, y)
-        slopes = []
-        for row, fraction in zip(self.tableau.a, self.tableau.c):
-            stage = z
-            for weight, slope in zip(row, slopes):
-                if weight:
-                    stage = stage + (dt * weight) * slope
-            slopes.append(f.derivative(self, stage, time + fraction * dt))
-        for weight, slope in zip(self.tableau.b, slopes):
-            z = z + (dt * weight) * slope
-        return f.to_public(self.bodies, z)
+    def __init__(self, system, tolerance=1e-6):
+        super().__init__(system, tolerance)
+        self._formulation = self.formulation(self)
+        self._slopes = np.empty((len(self.tableau.b), 13, self.bodies.count))
+        self._weights = np.zeros((len(self.tableau.b), len(self.tableau.b)))
+        for stage, row in enumerate(self.tableau.a):
+            self._weights[stage, :len(row)] = row
+
+    def _step_impl(self, rows, time, dt):
+        f, slopes = self._formulation, self._slopes
+        z = f.to_internal(rows)
+        for stage, fraction in enumerate(self.tableau.c):
+            used = np.flatnonzero(self._weights[stage, :stage])
+            if used.size == 1:   # one earlier slope (every classical stage): no reduction
+                np.multiply(slopes[used[0]], dt * self._weights[stage, used[0]], out=f.state)
+                f.state += z
+            elif used.size:
+                np.einsum('s,sin->in', dt * self._weights[stage, used], slopes[used],
+                          out=f.state)
+                f.state += z
+            else:
+                f.state[...] = z
+            f.slope(time + fraction * dt, out=slopes[stage])
+        combined = np.einsum('s,sin->in', dt * np.asarray(self.tableau.b), slopes,
+                             out=f.state)
+        combined += z
+        return f.to_public(combined)
 
 
 class ExplicitEuler(ExplicitRungeKutta):

@@ -30,7 +30,9 @@ from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION,
 # Yoshida (1990) weights: w1 + w0 + w1 = 1 and w1^3 + w0^3 + w1^3 = 0 cancel the h^3 error.
 YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
-AXES = np.eye(3)
+# Unit vectors e_1, e_2, e_3 as (3, 1) columns that broadcast over N bodies.
+AXIS_ROWS = np.eye(3)[:, :, None]
+MOMENTA = slice(LINEAR_MOMENTUM.start, ANGULAR_MOMENTUM.stop)   # rows of [P, L], as [F, tau]
 
 
 def dlm_rotation(moments, body_l, orientation, h):
@@ -45,12 +47,31 @@ def dlm_rotation(moments, body_l, orientation, h):
     body_l : (N, 3) angular momentum in principal axes
     orientation : (N, 4) (x, y, z, w), principal axes to world
     h : float, s
+
+    Returns
+    -------
+    body_l : (N, 3), orientation : (N, 4)
     """
+    body_l, orientation = dlm_rotation_rows(np.asarray(moments).T, np.array(body_l).T,
+                                            np.array(orientation).T, h)
+    return body_l.T, orientation.T
+
+
+def dlm_rotation_rows(moments, body_l, orientation, h):
+    """:func:`dlm_rotation` on component-major rows, (3, N), (3, N), (4, N), in place."""
     for axis, fraction in ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5)):
-        theta = fraction * h * body_l[:, axis] / moments[:, axis]
-        turn = rotation.exp_map(theta[:, None] * AXES[axis])
-        orientation = rotation.multiply(orientation, turn)
-        body_l = rotation.rotate_inverse(rotation.to_matrix(turn), body_l)
+        theta = (fraction * h) * body_l[axis] / moments[axis]
+        after, before = (axis + 1) % 3, (axis + 2) % 3
+        # L_b turns by -theta about the axis: a plane rotation of the other two components.
+        cos, sin = np.cos(theta), np.sin(theta)
+        l_after = body_l[after] * cos + body_l[before] * sin
+        body_l[before] = body_l[before] * cos - body_l[after] * sin
+        body_l[after] = l_after
+        # q <- q (sin(theta/2) e, cos(theta/2)) = cos q + sin q (e, 0).
+        half = 0.5 * theta
+        turned = rotation.times_pure_rows(orientation, AXIS_ROWS[axis] * np.sin(half))
+        orientation *= np.cos(half)
+        orientation += turned
     return body_l, orientation
 
 
@@ -65,61 +86,70 @@ class StrangSplitting(Integrator):
         super().__init__(system, tolerance)
         moments, body_from_principal = self.bodies.principal_moments
         self._moments = moments
-        self._principal = Rotation.from_matrix(body_from_principal).as_quat()
+        self._moment_rows = np.ascontiguousarray(moments.T)
+        self._principal = Rotation.from_matrix(body_from_principal).as_quat().T.copy()
+        self._principal_inverse = self._principal * np.array([[-1.0], [-1.0], [-1.0], [1.0]])
 
-    def _step_impl(self, y, time, dt):
+    def _step_impl(self, rows, time, dt):
         # Adjacent half kicks of consecutive sub-steps act at the same state and time, so
         # they merge: a composition of k Strang steps costs k + 1 wrench evaluations.
-        y = y.copy()
+        rows = np.array(rows, order='C')
         kick = 0.5 * self.weights[0]
         following = self.weights[1:] + (0.0,)
         for weight, next_weight in zip(self.weights, following):
-            self._kick(y, time, kick * dt)
-            self._drift(y, weight * dt)
+            self._kick(rows, time, kick * dt)
+            self._drift(rows, weight * dt)
             time += weight * dt
             kick = 0.5 * (weight + next_weight)
-        self._kick(y, time, kick * dt)
-        return y
+        self._kick(rows, time, kick * dt)
+        return rows
 
-    def _kick(self, y, time, h):
+    def _kick(self, rows, time, h):
         """Momenta after ``h`` of the wrench at fixed x and q, in place."""
         if not self.system.velocity_dependent:
-            force, torque = self.wrench(y, time)
-            y[:, LINEAR_MOMENTUM] += h * force
-            y[:, ANGULAR_MOMENTUM] += h * torque
+            self.wrench_rows(rows, time)
+            rows[MOMENTA] += h * self._wrench
             return
-        momenta = slice(LINEAR_MOMENTUM.start, ANGULAR_MOMENTUM.stop)
-        start = y[:, momenta].copy()
-        slopes = []
-        for row in self.kick_tableau.a:
-            y[:, momenta] = start + sum(h * w * s for w, s in zip(row, slopes) if w)
-            slopes.append(np.concatenate(self.wrench(y, time), axis=1))
-        y[:, momenta] = start + sum(h * w * s for w, s in zip(self.kick_tableau.b, slopes))
+        start = rows[MOMENTA].copy()
+        tableau = self.kick_tableau
+        slopes = np.empty((len(tableau.b),) + start.shape)
+        for stage, row in enumerate(tableau.a):
+            rows[MOMENTA] = start + sum(h * w * s for w, s in zip(row, slopes) if w)
+            self.wrench_rows(rows, time)
+            slopes[stage] = self._wrench
+        rows[MOMENTA] = start + np.einsum('s,sin->in', h * np.asarray(tableau.b), slopes)
 
-    def _drift(self, y, h):
+    def _drift(self, rows, h):
         """Free motion for ``h``: straight-line translation and torque-free rotation."""
-        y[:, POSITION] += h * y[:, LINEAR_MOMENTUM] / self.bodies.mass[:, None]
-        principal_q = rotation.multiply(y[:, ORIENTATION], self._principal)
-        world_from_principal = rotation.to_matrix(principal_q)
-        principal_l = rotation.rotate_inverse(world_from_principal, y[:, ANGULAR_MOMENTUM])
-        principal_l, principal_q = self.free_rotation(self._moments, principal_l, principal_q, h)
-        y[:, ANGULAR_MOMENTUM] = rotation.rotate(rotation.to_matrix(principal_q), principal_l)
-        y[:, ORIENTATION] = rotation.multiply(principal_q, rotation.conjugate(self._principal))
+        rows[POSITION] += rows[LINEAR_MOMENTUM] * (h * self.bodies.inverse_mass)
+        principal_q = rotation.multiply_rows(rows[ORIENTATION], self._principal)
+        matrices = rotation.matrix_rows(principal_q)
+        principal_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
+        principal_l, principal_q = self._free_rotation_rows(principal_l, principal_q, h)
+        rotation.rotate_rows(rotation.matrix_rows(principal_q), principal_l,
+                             out=rows[ANGULAR_MOMENTUM])
+        rows[ORIENTATION] = rotation.multiply_rows(principal_q, self._principal_inverse)
+
+    def _free_rotation_rows(self, principal_l, principal_q, h):
+        """Torque-free rotation of rows (3, N) and (4, N) for ``h``."""
+        raise NotImplementedError
 
 
 class DLM(StrangSplitting):
-    """Dullweber-Leimkuhler-McLachlan splitting. Order 2, two wrench evaluations (four with dampers).
+    """Dullweber-Leimkuhler-McLachlan splitting. Order 2; two wrench evaluations (four damped).
 
     Symplectic and time-reversible: ``|L|`` of a torque-free body is exact to round-off and
     its energy error stays bounded (no drift) at any step; accurate up to ``|omega| dt ~ 1``.
     """
 
     name = 'dlm'
-    free_rotation = staticmethod(dlm_rotation)
+
+    def _free_rotation_rows(self, principal_l, principal_q, h):
+        return dlm_rotation_rows(self._moment_rows, principal_l, principal_q, h)
 
 
 class DLM4(DLM):
-    """DLM composed by the Yoshida triple jump. Order 4, four wrench evaluations (sixteen with dampers).
+    """DLM composed by the Yoshida triple jump. Order 4; four wrench evaluations (16 damped).
 
     Keeps DLM's exact ``|L|`` and bounded energy; one inner sub-step runs backwards.
     """
@@ -139,7 +169,11 @@ class ExactSplit(StrangSplitting):
     """
 
     name = 'exact_split'
-    free_rotation = staticmethod(torque_free_flow)
+
+    def _free_rotation_rows(self, principal_l, principal_q, h):
+        principal_l, principal_q = torque_free_flow(self._moments, principal_l.T,
+                                                    principal_q.T, h)
+        return principal_l.T, principal_q.T
 
 
 class ExactSplit4(ExactSplit):

@@ -1,7 +1,11 @@
 """Semi-implicit (symplectic) Euler: kick the momenta, then drift with the new velocities."""
+import numpy as np
+
 from rigid_sim.core import rotation
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
+
+MOMENTA = slice(LINEAR_MOMENTUM.start, ANGULAR_MOMENTUM.stop)   # rows of [P, L], as [F, tau]
 
 
 class SemiImplicitEuler(Integrator):
@@ -15,15 +19,16 @@ class SemiImplicitEuler(Integrator):
     name = 'semi_implicit_euler'
     order = 1
 
-    def _step_impl(self, y, time, dt):
-        matrices = rotation.to_matrix(y[:, ORIENTATION])
-        force, torque = self.wrench(y, time, matrices)
-        y_next = y.copy()
-        y_next[:, LINEAR_MOMENTUM] += dt * force
-        y_next[:, ANGULAR_MOMENTUM] += dt * torque
-        body_l = rotation.rotate_inverse(matrices, y_next[:, ANGULAR_MOMENTUM])
-        omega = rotation.rotate(matrices, rotation.rotate(self.bodies.inertia_body_inv, body_l))
-        y_next[:, POSITION] += dt * y_next[:, LINEAR_MOMENTUM] / self.bodies.mass[:, None]
-        turn = rotation.exp_map(dt * omega)
-        y_next[:, ORIENTATION] = rotation.multiply(turn, y[:, ORIENTATION])
-        return y_next
+    def _step_impl(self, rows, time, dt):
+        bodies, rows = self.bodies, np.array(rows, order='C')
+        matrices = rotation.matrix_rows(rows[ORIENTATION])
+        self.wrench_rows(rows, time, matrices)
+        rows[MOMENTA] += dt * self._wrench
+        body_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
+        body_omega = rotation.rotate_rows(bodies.inertia_body_inv_rows, body_l)
+        omega = rotation.rotate_rows(matrices, body_omega)
+        rows[POSITION] += rows[LINEAR_MOMENTUM] * (dt * bodies.inverse_mass)
+        omega *= dt
+        rows[ORIENTATION] = rotation.multiply_rows(rotation.exp_map_rows(omega),
+                                                   rows[ORIENTATION])
+        return rows

@@ -1,0 +1,282 @@
+"""Hard cases stay numerically stable; safeguards; refusal of inputs that would poison a state.
+
+The cases are built by :mod:`rigid_sim.bench.stability` (the benchmark runs them longer).
+Every case also runs through a bare method (``auto_substep=False``) that theory says fails
+it, and the test asserts that it does: the assertion on the default can fail.
+"""
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from rigid_sim.bench import stability as hard
+from rigid_sim.core import rotation, safeguards
+from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
+from rigid_sim.core.integrators.adaptive import Dopri5
+from rigid_sim.core.safeguards import ENERGY_RTOL, STRANG_BOUND
+from rigid_sim.core.state import ANGULAR_MOMENTUM, ORIENTATION, POSITION, RigidBodies
+from rigid_sim.core.world import World
+
+# 1e5 steps of one body take ~50 s with the default here (the exact elliptic flow costs
+# ~0.4 ms a step), over this suite's budget: the test advances 100 bodies 1e3 steps (the same
+# body-steps, 100 initial conditions); the benchmark runs one body 1e6 steps.
+LONG_RUN = hard.long_run_case(count=hard.LONG_RUN_BODIES, duration=10.0)
+CASES = [c for c in hard.CASES if c.key != 'long_run'] + [LONG_RUN]
+# The bare method theory says fails each case, and how (see docs/stability.md).
+NAIVE = {
+    'tumbling': ('euler', 'gains'),          # |1 + i w h| > 1: explicit Euler gains energy
+    'thin_rod': ('rk4', 'loses'),            # |omega| dt = 1: RK4's |R(i)| = 0.994 damps
+    'fast_spin_0.5': ('euler', 'gains'),
+    'fast_spin_1': ('rk4', 'loses'),
+    'fast_spin_2': ('rk4', 'loses'),
+    'fast_spin_3': ('rk4', 'diverges'),      # above RK4's bound 2 sqrt(2)
+    'stiff_spring': ('euler', 'diverges'),   # energy x2 per step at w dt = 1
+    'damped': ('euler', 'loses'),            # (1 - c h)^n decays faster than exp(-c t)
+    'long_run': ('euler', 'gains'),
+    'impulse': ('rk4', 'diverges'),          # after the kick |omega| dt = 2 pi > 2.83
+    'far_mesh': ('rk4', 'drifts'),           # RK4 does not conserve |L| exactly
+    'tiny': ('rk4', 'loses'), 'unit': ('rk4', 'loses'), 'huge': ('rk4', 'loses'),
+}
+
+
+@pytest.mark.parametrize('case', CASES, ids=lambda c: c.key)
+def test_default_integrator_holds_every_hard_case(case):
+    """With the default integrator and safeguards nothing is non-finite, the energy stays
+    within 1e-3 of its exact history (constant, or E0 exp(-2 c t) under damping: no artificial
+    damping), |q| = 1 to 1e-12 and, torque-free, |L| is constant to 1e-12."""
+    outcome, world = hard.run(case)
+    assert outcome.finite and outcome.failed == 0, outcome
+    assert outcome.energy_error < ENERGY_RTOL, outcome
+    assert outcome.unit_error < hard.NORM_RTOL, outcome
+    if case.torque_free:
+        assert outcome.momentum_error < hard.NORM_RTOL, outcome
+
+
+@pytest.mark.parametrize('case', CASES, ids=lambda c: c.key)
+def test_naive_method_fails_every_hard_case(case):
+    """The same case through a bare method that theory says fails it does fail, as
+    documented: so each assertion of the default's test can fail."""
+    name, verdict = NAIVE[case.key]
+    short = hard.HardCase(**{**case.__dict__, 'duration': min(case.duration, 10.0)})
+    outcome, world = hard.run(short, name, auto_substep=False)
+    assert outcome.verdict() == verdict, outcome
+    assert np.isfinite(world.y).all(), 'a non-finite state was stored'
+
+
+def test_impulse_turns_the_body_by_pi_in_one_step():
+    """A body-axes torque tau about principal axis z, from rest, for one step dt, turns the
+    body by tau dt^2 / 2 I3 = pi about z and leaves L = tau dt and energy tau pi; the safeguard
+    sees the spin reached within the step and redoes it in substeps."""
+    case = hard.CASES_BY_KEY['impulse']
+    world = case.build(DEFAULT_INTEGRATOR, True)
+    q0 = world.y[0, ORIENTATION].copy()
+    world.step(case.dt)
+    turn = rotation.multiply(rotation.conjugate(q0[None]), world.y[:1, ORIENTATION])[0]
+    torque = 2.0 * np.pi * 3.0 / case.dt ** 2
+    assert abs(2.0 * np.arctan2(abs(turn[2]), abs(turn[3])) - np.pi) < 1e-9
+    np.testing.assert_allclose(np.abs(turn[:2]), 0.0, atol=1e-12)
+    np.testing.assert_allclose(world.energy(), torque * np.pi, rtol=1e-12)
+    assert world.diagnostics.substeps > 1
+    assert 'reached during the step' in world.diagnostics.reason
+
+
+def test_stiff_spring_substeps_follow_the_energy_bound():
+    """k/m = 1e6 at dt = 1e-3 is w dt = 1: the default splits each step into
+    ceil(w dt / STRANG_BOUND) substeps, and the mass follows x0 cos(w t) closely."""
+    case = hard.STIFF_SPRING
+    world = case.build(DEFAULT_INTEGRATOR, True)
+    x0 = world.y[0, POSITION].copy()
+    for _ in range(50):
+        world.step(case.dt)
+    assert world.diagnostics.substeps == math.ceil(1000.0 * case.dt / STRANG_BOUND)
+    expected = x0 * np.cos(1000.0 * world.time)
+    assert np.linalg.norm(world.y[0, POSITION] - expected) < 1e-2 * x0[0]
+
+
+def test_far_mesh_inertia_is_exact_only_when_recentred():
+    """A tilted box 1e4 sizes from its origin: mesh_exact recentres and gets the box's inertia
+    R diag(m (b^2 + c^2) / 12 ...) R^T to 1e-11; integrating about the far origin loses
+    eps (d/l)^3 ~ 1e-4."""
+    from rigid_sim.core.inertia import mesh_exact
+    offset = np.array([1.0, 0.7, -0.3]) * 1e4
+    tilt = Rotation.from_rotvec([0.3, -0.5, 0.8]).as_matrix()
+    box = trimesh.creation.box((1.0, 2.0, 3.0))
+    box.apply_transform(np.block([[tilt, offset[:, None]], [np.zeros((1, 3)), 1.0]]))
+    exact = tilt @ (6.0 / 12.0 * np.diag([13.0, 10.0, 5.0])) @ tilt.T
+    properties = mesh_exact(box, mass=6.0)
+    assert np.max(np.abs(properties.inertia - exact)) < 1e-11 * 6.5
+    np.testing.assert_allclose(properties.center_of_mass, offset, rtol=1e-14)
+    naive = trimesh.triangles.mass_properties(box.triangles, density=1.0)['inertia']
+    assert np.max(np.abs(naive - exact)) > 1e-6 * 6.5
+
+
+def test_far_mesh_body_frame_orbits_its_fixed_centre_of_mass():
+    """Torque-free, the centre of mass moves in a straight line at P/M while the body frame's
+    origin, 1e4 sizes away, turns about it at the constant distance |c| (to 1e-12)."""
+    case = hard.CASES_BY_KEY['far_mesh']
+    world = case.build(DEFAULT_INTEGRATOR, True)
+    x0, lever = world.y[0, POSITION].copy(), np.linalg.norm(world.bodies.com_in_body[0])
+    velocity = world.snapshot().velocity[0].copy()
+    for _ in range(100):
+        world.step(case.dt)
+    origin, _ = world.snapshot().body_frame_pose()
+    np.testing.assert_allclose(world.y[0, POSITION], x0 + velocity * world.time, rtol=1e-13)
+    assert abs(np.linalg.norm(origin[0] - world.y[0, POSITION]) / lever - 1.0) < 1e-12
+
+
+def nondimensional_state(world, mass, size):
+    """x / size, q, omega (rad/s): equal for bodies that differ only in units."""
+    return np.concatenate((world.y[0, POSITION] / size, world.y[0, ORIENTATION],
+                           world.snapshot().angular_velocity[0]))
+
+
+@pytest.mark.parametrize('integrator', [DEFAULT_INTEGRATOR, 'dopri5'])
+def test_tiny_and_huge_bodies_move_like_the_unit_body(integrator):
+    """Dynamical similarity: a 1e-6 kg mm body and a 1e6 kg 100 m body with the same rates
+    move, in units of their size, exactly as the 1 kg 1 m body (to 1e-9): the step control
+    and the adaptive error scale are unit-free."""
+    scales = {'tiny': (1e-6, 1e-3), 'unit': (1.0, 1.0), 'huge': (1e6, 1e2)}
+    states = {}
+    for key, (mass, size) in scales.items():
+        case = hard.CASES_BY_KEY[key]
+        world = case.build(integrator, True)
+        for _ in range(10):
+            world.step(case.dt)
+        states[key] = nondimensional_state(world, mass, size)
+    for key in ('tiny', 'huge'):
+        np.testing.assert_allclose(states[key], states['unit'], rtol=1e-9, atol=1e-9)
+
+
+def test_absolute_adaptive_tolerance_would_break_similarity(monkeypatch):
+    """The check above can fail: with an absolute error scale (1 for every component) dopri5
+    holds the tiny body to 1e-6 m, a thousandth of its size, and its motion departs from the
+    unit body's by far more than 1e-9."""
+    monkeypatch.setattr(Dopri5, '_scale', lambda self, z, dt: np.ones_like(z))
+    states = []
+    for key, mass, size in (('tiny', 1e-6, 1e-3), ('unit', 1.0, 1.0)):
+        world = hard.CASES_BY_KEY[key].build('dopri5', True)
+        for _ in range(10):
+            world.step(0.05)
+        states.append(nondimensional_state(world, mass, size))
+    assert np.max(np.abs(states[0] - states[1])) > 1e-6
+
+
+class NonFiniteAbove:
+    """An integrator that returns NaN for any step longer than ``limit`` s (a stand-in for a
+    method past its stability bound), else the exact straight-line motion."""
+
+    name = 'nan_above'
+
+    def __init__(self, limit):
+        self.limit = limit
+
+    def step(self, y, time, dt):
+        y = y.copy()
+        y[:, POSITION] += dt * 1.0
+        return y * np.nan if dt > self.limit else y
+
+
+def free_world(integrator=DEFAULT_INTEGRATOR):
+    return hard.world([1.0, 2.0, 3.0], [0.1, 0.2, 0.3], (), integrator)
+
+
+def test_non_finite_step_is_retried_smaller():
+    """A step whose result is non-finite is rejected and retried in halves: here dt/4 is
+    finite, so two rejections, then the full step lands; nothing non-finite is stored."""
+    world = free_world()
+    world.integrator = NonFiniteAbove(0.3)
+    assert world.step(1.0) is True
+    assert world.diagnostics.rejected_steps == 2 and world.diagnostics.failed_steps == 0
+    assert np.isfinite(world.y).all() and world.time == 1.0
+
+
+def test_step_that_stays_non_finite_keeps_the_last_good_state():
+    """When every retry is non-finite the step is given up without raising: y and time stay
+    at the last good state, step returns False and diagnostics say why."""
+    world = free_world()
+    world.integrator = NonFiniteAbove(0.0)
+    before = world.y.copy()
+    assert world.step(0.01) is False
+    np.testing.assert_array_equal(world.y, before)
+    assert world.time == 0.0
+    diagnostics = world.diagnostics
+    assert diagnostics.failed_steps == 1
+    assert diagnostics.rejected_steps == safeguards.MAX_HALVINGS + 1
+    assert 'non-finite' in diagnostics.last_failure
+    world.reset()
+    assert world.diagnostics == safeguards.StepDiagnostics()
+
+
+def test_unlisted_effects_cost_nothing(monkeypatch):
+    """A torque-free world on the exact flow needs no bound: planning a step computes no
+    rotation at all (and takes one substep even at |omega| dt = 3)."""
+    world = free_world()
+    monkeypatch.setattr(rotation, 'to_matrix', lambda q: pytest.fail('rotation computed'))
+    assert world._guard.plan(world.integrator, world.y, 10.0) == (1, '')
+
+
+@pytest.mark.parametrize('dt', [0.0, -0.01, np.nan, np.inf])
+def test_world_refuses_a_bad_time_step(dt):
+    """A time step must be finite and positive: anything else is a ValueError naming it, and
+    the state and time do not change."""
+    world = free_world()
+    before = world.y.copy()
+    with pytest.raises(ValueError, match='time step'):
+        world.step(dt)
+    np.testing.assert_array_equal(world.y, before)
+    assert world.time == 0.0
+
+
+def test_world_refuses_a_non_finite_initial_state():
+    """A state holding NaN cannot start a world."""
+    bodies = free_world().bodies
+    with pytest.raises(ValueError, match='finite'):
+        World(bodies, np.full((1, 13), np.nan))
+
+
+@pytest.mark.parametrize('force, torque, why', [
+    ((np.nan, 0.0, 0.0), (0.0, 0.0, 0.0), 'non-finite'),
+    ((0.0, 0.0, 0.0), (0.0, np.inf, 0.0), 'non-finite'),
+    ((2e4, 0.0, 0.0), (0.0, 0.0, 0.0), 'max_force'),
+    ((0.0, 0.0, 0.0), (0.0, 0.0, -2e4), 'max_torque')])
+def test_wrenches_that_would_poison_the_state_are_refused(force, torque, why):
+    """A non-finite or above-limit wrench is a ValueError saying which, and the wrenches
+    already held (so the motion) are unchanged."""
+    bodies = free_world().bodies
+    wrenches = AppliedWrenches(bodies)
+    wrenches.hold(0, 'kept', 'world', (1.0, 0.0, 0.0))
+    held = wrenches.held
+    with pytest.raises(ValueError, match=why):
+        wrenches.hold(0, 'new', 'world', force, torque)
+    assert wrenches.held == held
+
+
+@pytest.mark.parametrize('mass, inertia, why', [
+    (0.0, np.eye(3), 'positive'), (-1.0, np.eye(3), 'positive'),
+    (np.nan, np.eye(3), 'positive'), (np.inf, np.eye(3), 'positive'),
+    (1.0, np.diag([1.0, 1.0, -1.0]), 'positive definite'),
+    (1.0, np.diag([1.0, 1.0, 3.0]), 'triangle'),
+    (1.0, np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), 'symmetric'),
+    (1.0, np.diag([1.0, np.nan, 1.0]), 'finite')])
+def test_non_physical_bodies_are_refused(mass, inertia, why):
+    """Masses must be finite and positive; an inertia must be finite, symmetric, positive
+    definite and obey I1 + I2 >= I3 (no mass distribution has otherwise)."""
+    with pytest.raises(ValueError, match=why):
+        RigidBodies(('b',), np.array([mass]), inertia[None], np.zeros((1, 3)))
+
+
+def test_damped_angular_momentum_decays_exactly():
+    """tau = -c L keeps L's direction and scales it by exp(-c t) whatever the tumbling, up to
+    the explicit-midpoint kick's error c^3 h^2 t / 6 (its e^-x - (1 - x + x^2/2) per step)."""
+    case = hard.CASES_BY_KEY['damped']
+    world = case.build(DEFAULT_INTEGRATOR, True)
+    l0 = world.y[0, ANGULAR_MOMENTUM].copy()
+    for _ in range(40):
+        world.step(case.dt)
+    expected = l0 * np.exp(-hard.DAMPING_RATE * world.time)
+    h = case.dt / world.diagnostics.substeps
+    allowed = hard.DAMPING_RATE ** 3 * h ** 2 * world.time / 6.0
+    np.testing.assert_allclose(world.y[0, ANGULAR_MOMENTUM], expected, rtol=allowed)
