@@ -1,0 +1,161 @@
+"""Messages <-> arrays: the only place ROS messages meet the core's numpy arrays.
+
+Output messages are built once per scene and refilled on every publication: the pose of a
+body is one ``Pose`` object shared by its PoseStamped, its Odometry, the PoseArray and its
+marker, and one ``Time`` object is the stamp of them all. rclpy serialises a message when it
+is published, so reusing the objects is safe and saves building ~10 messages per body per tick.
+Quaternions are (x, y, z, w) in ROS messages and in the core alike.
+"""
+import numpy as np
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TwistStamped
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from visualization_msgs.msg import Marker, MarkerArray
+
+from rigid_sim.core import rotation
+
+NANOSECONDS = 1_000_000_000
+# One colour per body, cycled: distinguishable shapes in RViz (RGBA, 0..1).
+PALETTE = ((0.90, 0.35, 0.20), (0.20, 0.55, 0.90), (0.30, 0.75, 0.35), (0.85, 0.75, 0.20),
+           (0.60, 0.40, 0.80), (0.40, 0.80, 0.80))
+
+
+def to_time(seconds, stamp=None):
+    """Simulated ``seconds`` as a builtin_interfaces/Time, filled into ``stamp`` if given."""
+    stamp = Time() if stamp is None else stamp
+    stamp.sec, stamp.nanosec = divmod(int(round(seconds * NANOSECONDS)), NANOSECONDS)
+    return stamp
+
+
+def to_seconds(stamp):
+    """A builtin_interfaces/Time as float seconds."""
+    return stamp.sec + stamp.nanosec / NANOSECONDS
+
+
+def wrench_arrays(message):
+    """Force (3,) N and torque (3,) N m of a geometry_msgs/WrenchStamped."""
+    force, torque = message.wrench.force, message.wrench.torque
+    return (np.array((force.x, force.y, force.z)), np.array((torque.x, torque.y, torque.z)))
+
+
+def pose_arrays(pose):
+    """Position (3,) m and orientation (4,) (x, y, z, w) of a geometry_msgs/Pose."""
+    p, q = pose.position, pose.orientation
+    return np.array((p.x, p.y, p.z)), np.array((q.x, q.y, q.z, q.w))
+
+
+def vector_array(vector):
+    """A geometry_msgs/Vector3 as a (3,) array."""
+    return np.array((vector.x, vector.y, vector.z))
+
+
+def clock(seconds):
+    """A rosgraph_msgs/Clock at simulated ``seconds``."""
+    return Clock(clock=to_time(seconds))
+
+
+class StateMessages:
+    """The per-tick outputs of N bodies, refilled in place from a Snapshot.
+
+    Attributes
+    ----------
+    poses, twists, odometry : lists of N PoseStamped, TwistStamped, Odometry (scene order)
+    pose_array : PoseArray of the same N Pose objects
+    markers : MarkerArray, one marker per body, sharing the same Pose objects
+    """
+
+    def __init__(self, bodies, world_frame):
+        self.stamp = Time()
+        shared_poses = [Pose() for _ in bodies]
+        self.poses = [PoseStamped(pose=pose) for pose in shared_poses]
+        self.twists = [TwistStamped() for _ in bodies]
+        self.odometry = [Odometry(child_frame_id=body.name) for body in bodies]
+        self.pose_array = PoseArray(poses=shared_poses)
+        self.markers = MarkerArray(markers=[marker(i, body, pose)
+                                            for i, (body, pose) in enumerate(zip(bodies,
+                                                                                 shared_poses))])
+        headers = ([m.header for m in self.poses + self.twists + self.odometry]
+                   + [self.pose_array.header] + [m.header for m in self.markers.markers])
+        for header in headers:
+            header.frame_id = world_frame
+            header.stamp = self.stamp
+        for odometry, pose in zip(self.odometry, shared_poses):
+            odometry.pose.pose = pose
+
+    def fill(self, snapshot):
+        """Write the pose, world twist and body twist of every body at ``snapshot``."""
+        origin, orientation = snapshot.body_frame_pose()
+        velocity, angular_velocity = snapshot.body_frame_twist()
+        # REP-105: odometry twist in the child (body) frame's axes.
+        velocity_body = rotation.rotate_inverse(snapshot.rotation, velocity)
+        angular_body = rotation.rotate_inverse(snapshot.rotation, angular_velocity)
+        to_time(snapshot.time, self.stamp)
+        rows = np.hstack((origin, orientation, velocity, angular_velocity, velocity_body,
+                          angular_body)).tolist()
+        for row, pose, twist, odometry in zip(rows, self.poses, self.twists, self.odometry):
+            _set_pose(pose.pose, row[0:7])
+            _set_twist(twist.twist, row[7:13])
+            _set_twist(odometry.twist.twist, row[13:19])
+
+
+def _set_pose(pose, values):
+    position, q = pose.position, pose.orientation
+    position.x, position.y, position.z = values[0:3]
+    q.x, q.y, q.z, q.w = values[3:7]
+
+
+def _set_twist(twist, values):
+    linear, angular = twist.linear, twist.angular
+    linear.x, linear.y, linear.z = values[0:3]
+    angular.x, angular.y, angular.z = values[3:6]
+
+
+def marker(index, body, pose):
+    """The RViz marker of one body's shape, drawn at ``pose`` (its body frame).
+
+    ``body`` is a scene BodySpec; cylinders are along the body z axis, as RViz draws them.
+    """
+    shape = body.shape
+    result = Marker(ns=body.name, id=index, action=Marker.ADD, pose=pose, frame_locked=False)
+    red, green, blue = PALETTE[index % len(PALETTE)]
+    result.color.r, result.color.g, result.color.b, result.color.a = red, green, blue, 1.0
+    if shape['type'] == 'box':
+        result.type = Marker.CUBE
+        scale = shape['size']
+    elif shape['type'] == 'sphere':
+        result.type = Marker.SPHERE
+        scale = np.full(3, 2.0 * shape['radius'])
+    elif shape['type'] == 'cylinder':
+        result.type = Marker.CYLINDER
+        diameter = 2.0 * shape['radius']
+        scale = (diameter, diameter, shape['length'])
+    else:
+        result.type = Marker.MESH_RESOURCE
+        result.mesh_resource = 'file://' + shape['file']
+        scale = np.broadcast_to(shape['scale'], 3)
+    result.scale.x, result.scale.y, result.scale.z = (float(s) for s in scale)
+    return result
+
+
+def diagnostics(name, stamp_seconds, level, summary, values):
+    """A DiagnosticArray with one status; ``values`` maps key -> value (formatted as text)."""
+    status = DiagnosticStatus(level=level, name=name, message=summary, hardware_id='rigid_sim')
+    status.values = [KeyValue(key=key, value=_text(value)) for key, value in values.items()]
+    array = DiagnosticArray(status=[status])
+    to_time(stamp_seconds, array.header.stamp)
+    return array
+
+
+def _text(value):
+    if isinstance(value, np.ndarray):
+        return ' '.join(f'{v:.9g}' for v in value)
+    if isinstance(value, float):
+        return f'{value:.9g}'
+    return str(value)
+
+
+def diagnostic_values(message):
+    """The key -> text values of the first status of a DiagnosticArray."""
+    return {item.key: item.value for item in message.status[0].values}

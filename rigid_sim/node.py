@@ -1,0 +1,257 @@
+"""The rclpy node: parameters, a wall-clock timer, wrench inputs, state outputs, services.
+
+The node holds no physics: a :class:`~rigid_sim.core.world.World` does. Subscription
+callbacks only store messages; :meth:`RigidSimNode.tick`, run by the timer, applies them,
+advances the world and publishes. Tests call ``tick()`` directly for deterministic steps.
+"""
+import math
+import time
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock as ClockMessage
+from std_srvs.srv import SetBool, Trigger
+from visualization_msgs.msg import MarkerArray
+
+from rigid_sim import conversions, parameters
+from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.integrators import make_integrator
+from rigid_sim.core.scene import build_world, load_scene, wrench_target
+from rigid_sim.core.state import LINEAR_MOMENTUM, POSITION, ANGULAR_MOMENTUM
+from rigid_sim.resources import find_scene
+
+NODE_NAME = 'rigid_sim'
+DIAGNOSTICS_PERIOD = 1.0  # s of wall time; /diagnostics aggregators expect about 1 Hz
+WARNING_PERIOD = 2.0      # s of wall time between two warnings about refused wrenches
+QUEUE_DEPTH = 10
+
+
+def load(settings):
+    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError)."""
+    scene = load_scene(find_scene(settings.scene))
+    return scene, build_world(scene, settings.integrator, settings.tolerance)
+
+
+class TickStats:
+    """Step times and advanced simulated time over one diagnostics window."""
+
+    def __init__(self, sim_time):
+        self.ticks = 0
+        self.step_total = 0.0   # s of wall time spent applying inputs and integrating
+        self.step_max = 0.0     # s, the longest of them
+        self.sim_start = sim_time
+        self.wall_start = time.monotonic()
+
+    def add(self, step_seconds):
+        self.ticks += 1
+        self.step_total += step_seconds
+        self.step_max = max(self.step_max, step_seconds)
+
+    def real_time_factor(self, sim_time):
+        """Simulated seconds advanced per wall second since the window began."""
+        return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
+
+
+class RigidSimNode(Node):
+    """Simulates the rigid bodies of a scene file; see the package README for the contract.
+
+    Parameters
+    ----------
+    **kwargs
+        Passed to :class:`rclpy.node.Node` (``context``, ``cli_args``,
+        ``parameter_overrides``, ...).
+
+    Raises
+    ------
+    rigid_sim.parameters.ParameterError, rigid_sim.core.scene.SceneError, FileNotFoundError
+        When a parameter value or the scene is refused at start.
+    """
+
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        self.settings = parameters.declare(self)
+        self.scene, self.world = load(self.settings)
+        self.paused = False
+        self.ticks = 0
+        self._inbox = []           # (body index, WrenchStamped) in arrival order
+        self._pending = None       # validated parameter change awaiting the post-set callback
+        self._outputs = []         # per body: pose, twist and odometry publishers
+        self._wrench_subscriptions = []
+        self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
+        self._diagnostics_publisher = self.create_publisher(
+            DiagnosticArray, '/diagnostics', QUEUE_DEPTH)
+        self._pose_array_publisher = self.create_publisher(PoseArray, '~/poses', QUEUE_DEPTH)
+        self._markers_publisher = self.create_publisher(MarkerArray, '~/markers', QUEUE_DEPTH)
+        self._wire_scene()
+        self.create_service(Trigger, '~/reset', self._on_reset)
+        self.create_service(SetBool, '~/pause', self._on_pause)
+        wall_clock = Clock(clock_type=ClockType.STEADY_TIME)  # never sim time: we make it
+        self.timer = self.create_timer(1.0 / self.settings.rate, self.tick, clock=wall_clock)
+        self.create_timer(DIAGNOSTICS_PERIOD, self.publish_diagnostics, clock=wall_clock)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.get_logger().info(self._describe())
+
+    def _describe(self):
+        s = self.settings
+        return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
+                f'{s.integrator} at {s.rate:g} Hz, time_step {s.time_step:g} s x {s.substeps} '
+                f'substeps (real-time factor {s.rate * s.time_step:g}); topics under '
+                f'{self.get_fully_qualified_name()}/')
+
+    def _wire_scene(self):
+        """Per-body topics, reused output messages and counters for the current scene."""
+        for publishers in self._outputs:
+            for publisher in publishers:
+                self.destroy_publisher(publisher)
+        for subscription in self._wrench_subscriptions:
+            self.destroy_subscription(subscription)
+        self._outputs, self._wrench_subscriptions = [], []
+        for index, body in enumerate(self.scene.bodies):
+            topics = [(PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom')]
+            self._outputs.append([self.create_publisher(kind, f'~/{body.name}/{topic}',
+                                                        QUEUE_DEPTH) for kind, topic in topics])
+            if body.wrench_input:
+                self._wrench_subscriptions.append(self.create_subscription(
+                    WrenchStamped, f'~/{body.name}/wrench',
+                    lambda message, index=index: self._inbox.append((index, message)),
+                    QUEUE_DEPTH))
+        self._build_messages()
+        self._inbox.clear()
+        self.refused = {body.name: 0 for body in self.scene.bodies}
+        self._last_refusal = ''
+        self._stats = TickStats(self.world.time)
+
+    def _build_messages(self):
+        self._messages = conversions.StateMessages(self.scene.bodies,
+                                                   self.settings.world_frame)
+
+    @property
+    def pending_inputs(self):
+        """Number of received wrench messages the next tick will apply."""
+        return len(self._inbox)
+
+    def tick(self):
+        """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish."""
+        started = time.perf_counter()
+        self._apply_inputs()
+        if not self.paused:
+            step = self.settings.time_step / self.settings.substeps
+            for _ in range(self.settings.substeps):
+                self.world.step(step)
+        self._stats.add(time.perf_counter() - started)
+        if self.settings.publish_clock:
+            self._clock_publisher.publish(conversions.clock(self.world.time))
+        if self.ticks % self.settings.publish_every == 0:
+            self.publish_state()
+        self.ticks += 1
+
+    def _apply_inputs(self):
+        """Hold every stored wrench in arrival order; a refused one changes nothing."""
+        inbox, self._inbox = self._inbox, []
+        applied = self.world.effect(AppliedWrenches)
+        timeout = self.settings.wrench_timeout
+        expires = self.world.time + timeout if timeout > 0.0 else math.inf
+        for index, message in inbox:
+            name = self.scene.bodies[index].name
+            try:
+                frame, point = wrench_target(self.scene, name, message.header.frame_id,
+                                             self.settings.world_frame)
+                force, torque = conversions.wrench_arrays(message)
+                applied.hold(index, message.header.frame_id, frame, force, torque, point,
+                             expires)
+            except ValueError as error:
+                self.refused[name] += 1
+                self._last_refusal = f'~/{name}/wrench: {error}'
+                self.get_logger().warning(f'refused a wrench on {self._last_refusal}',
+                                          throttle_duration_sec=WARNING_PERIOD)
+
+    def publish_state(self):
+        """Publish pose, twists and odometry of every body, the PoseArray and the markers."""
+        self._messages.fill(self.world.snapshot())
+        messages = zip(self._messages.poses, self._messages.twists, self._messages.odometry)
+        for publishers, outputs in zip(self._outputs, messages):
+            for publisher, message in zip(publishers, outputs):
+                publisher.publish(message)
+        self._pose_array_publisher.publish(self._messages.pose_array)
+        self._markers_publisher.publish(self._messages.markers)
+
+    def publish_diagnostics(self):
+        """Publish step time, real-time factor, energy, momenta and refused-input counts."""
+        stats, y = self._stats, self.world.y
+        step_mean = stats.step_total / max(stats.ticks, 1)
+        late = step_mean > 1.0 / self.settings.rate
+        values = {
+            'simulated time [s]': self.world.time, 'paused': self.paused,
+            'integrator': self.settings.integrator,
+            'step time mean [s]': step_mean, 'step time max [s]': stats.step_max,
+            'real-time factor': stats.real_time_factor(self.world.time),
+            'real-time factor target': self.settings.rate * self.settings.time_step,
+            'energy [J]': self.world.energy(),
+            'linear momentum [kg m/s]': y[:, LINEAR_MOMENTUM].sum(axis=0),
+            'angular momentum about the world origin [kg m^2/s]': (
+                y[:, ANGULAR_MOMENTUM] + np.cross(y[:, POSITION], y[:, LINEAR_MOMENTUM])
+            ).sum(axis=0),
+            'refused inputs': sum(self.refused.values()),
+            **{f'refused inputs {name}': count for name, count in self.refused.items()},
+            'last refused input': self._last_refusal}
+        level = DiagnosticStatus.WARN if late else DiagnosticStatus.OK
+        summary = 'steps take longer than a tick' if late else 'running'
+        self._diagnostics_publisher.publish(conversions.diagnostics(
+            f'{self.get_name()}: physics', self.world.time, level, summary, values))
+        self._stats = TickStats(self.world.time)
+
+    def _on_reset(self, request, response):
+        self.world.reset()
+        applied = self.world.effect(AppliedWrenches)
+        if applied is not None:
+            applied.release()
+        self._inbox.clear()
+        self._stats = TickStats(self.world.time)
+        response.success, response.message = True, 'back to the initial state at time 0'
+        return response
+
+    def _on_pause(self, request, response):
+        self.paused = bool(request.data)
+        response.success = True
+        response.message = f'{"paused" if self.paused else "running"} at {self.world.time:g} s'
+        return response
+
+    def _on_set_parameters(self, changes):
+        """Refuse a change with the reason, or keep it ready for :meth:`_apply_parameters`."""
+        try:
+            proposed = parameters.updated(self.settings, changes)
+            names = {change.name for change in changes}
+            self._pending = (proposed, self._prepare(proposed, 'scene' in names))
+        except (ValueError, OSError) as error:  # SceneError is a ValueError
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _prepare(self, proposed, scene_set):
+        """Load the scene (set again: reload the file), or build a changed integrator."""
+        current = self.settings
+        if scene_set:
+            return load(proposed)
+        if (proposed.integrator, proposed.tolerance) != (current.integrator, current.tolerance):
+            return make_integrator(proposed.integrator, self.world, proposed.tolerance)
+        return None
+
+    def _apply_parameters(self, changes):
+        proposed, prepared = self._pending
+        previous, self.settings = self.settings, proposed
+        if isinstance(prepared, tuple):
+            self.scene, self.world = prepared
+            self._wire_scene()  # new bodies: new topics, messages and counters
+        else:
+            if prepared is not None:
+                self.world.integrator = prepared
+            if proposed.world_frame != previous.world_frame:
+                self._build_messages()
+        if proposed.rate != previous.rate:
+            self.timer.timer_period_ns = 1e9 / proposed.rate
+        self.get_logger().info(self._describe())

@@ -1,0 +1,174 @@
+"""The node's parameters: names, descriptors, defaults and the checks that refuse bad values.
+
+Every parameter is declared with ``dynamic_typing`` so that a numeric one accepts an integer
+literal (``-p rate:=100``, ``ros2 param set ... rate 100``): rclpy 7 refuses an integer for a
+parameter declared as double. The type and range are then checked here, for start-up and
+runtime values alike (at runtime rclpy checks the range of a double first, in its own words).
+"""
+import math
+from dataclasses import dataclass, replace
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+
+from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
+from rigid_sim.resources import DEFAULT_SCENE
+
+MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (ROS_NOTES)
+# Parameters rclpy declares on every node; an override of these is not a misspelling.
+NODE_BUILTINS = ('use_sim_time', 'start_type_description_service', 'qos_overrides')
+
+
+class ParameterError(ValueError):
+    """A parameter value the node refuses; the message names the parameter and the reason."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Validated parameter values, as the node uses them."""
+
+    scene: str             # scene file: a path, or a bare name looked up in config/scenes
+    rate: float            # Hz of wall time, ticks per second
+    time_step: float       # s of simulated time advanced per tick
+    substeps: int          # integrator steps per tick
+    publish_rate: float    # Hz of wall time at which outputs go out
+    integrator: str        # a name in rigid_sim.core.integrators.REGISTRY
+    tolerance: float       # error target of adaptive integrators
+    wrench_timeout: float  # s of simulated time a wrench is held; 0 holds until replaced
+    world_frame: str       # frame_id of the fixed frame
+    publish_clock: bool    # publish /clock
+
+    @property
+    def publish_every(self):
+        """Ticks between two publications: ``round(rate / publish_rate)``, at least 1."""
+        return max(1, round(self.rate / self.publish_rate))
+
+
+@dataclass(frozen=True)
+class Spec:
+    """How one parameter is declared and checked."""
+
+    kind: type         # float, int, str or bool
+    description: str
+    low: float = None  # inclusive bounds of a numeric parameter
+    high: float = None
+    above_low: bool = False  # True: the lower bound itself is refused (strictly positive)
+
+
+SPECS = {
+    'scene': Spec(str, 'scene YAML file; a bare name is looked up in the working directory, '
+                       'then in share/rigid_sim/config/scenes'),
+    'rate': Spec(float, 'ticks per second of wall time, Hz', 0.0, MAX_RATE, above_low=True),
+    'time_step': Spec(float, 'simulated seconds per tick (default 1/rate); '
+                             'time_step x rate is the real-time factor', 0.0, 10.0,
+                      above_low=True),
+    'substeps': Spec(int, 'integrator steps per tick', 1, 10000),
+    'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
+                                'and markers go out (default rate); at most once per tick',
+                         0.0, MAX_RATE, above_low=True),
+    'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
+    'tolerance': Spec(float, 'error target of adaptive integrators', 0.0, 1.0, above_low=True),
+    'wrench_timeout': Spec(float, 'seconds of simulated time a wrench is held after its '
+                                  'message; 0 holds it until replaced', 0.0, 1.0e9),
+    'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses'),
+    'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
+}
+
+
+def descriptor(name):
+    """The ParameterDescriptor of parameter ``name``: description, type note and range."""
+    spec = SPECS[name]
+    numeric = ' (integer literals accepted)' if spec.kind is float else ''
+    result = ParameterDescriptor(
+        name=name, description=spec.description, dynamic_typing=True,
+        additional_constraints=f'type {spec.kind.__name__}{numeric}')
+    if spec.kind is float:
+        result.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                          to_value=float(spec.high))]
+    elif spec.kind is int:
+        result.integer_range = [IntegerRange(from_value=spec.low, to_value=spec.high, step=1)]
+    return result
+
+
+def coerce(name, value):
+    """``value`` as parameter ``name`` takes it, or ParameterError saying why not."""
+    spec = SPECS[name]
+    # bool is an int in Python; a flag given for a number is a mistake, not 1 or 0.
+    if spec.kind in (int, float) and (isinstance(value, bool) or
+                                      not isinstance(value, (int, float))):
+        raise ParameterError(f'parameter {name!r}: expected a number, got {value!r}')
+    if spec.kind is int and not isinstance(value, int):
+        raise ParameterError(f'parameter {name!r}: expected an integer, got {value!r}')
+    if spec.kind in (str, bool) and not isinstance(value, spec.kind):
+        raise ParameterError(
+            f'parameter {name!r}: expected a {spec.kind.__name__}, got {value!r}')
+    if spec.low is not None:
+        _check_range(name, spec, value)
+    if spec.kind is str and not value.strip():
+        raise ParameterError(f'parameter {name!r}: must not be empty')
+    return spec.kind(value)
+
+
+def _check_range(name, spec, value):
+    too_low = value <= spec.low if spec.above_low else value < spec.low
+    if not math.isfinite(value) or too_low or value > spec.high:
+        low = '(' if spec.above_low else '['
+        raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
+                             f'{low}{spec.low}, {spec.high}]')
+
+
+def _check_integrator(name):
+    if name not in REGISTRY:
+        raise ParameterError(
+            f'parameter \'integrator\': unknown integrator {name!r}; valid: {sorted(REGISTRY)}')
+
+
+def declare(node):
+    """Declare every parameter on ``node`` and return the validated Settings.
+
+    ``time_step`` defaults to ``1 / rate`` and ``publish_rate`` to ``rate``, so ``rate`` is
+    read before they are declared.
+
+    Raises
+    ------
+    ParameterError
+        For a refused value, or an override that names no parameter of this node.
+    """
+    _check_unknown_overrides(node)
+    values = {}
+    defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
+                'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
+                'world_frame': 'world', 'publish_clock': True}
+    for name in SPECS:
+        if name == 'time_step':
+            defaults[name] = 1.0 / values['rate']
+        elif name == 'publish_rate':
+            defaults[name] = values['rate']
+        # Checked here before rclpy sees it, so a refusal at start gives the same reason
+        # as at runtime; the declared value is the coerced one (50.0 for -p rate:=50).
+        override = node._parameter_overrides.get(name)
+        values[name] = coerce(name, defaults[name] if override is None else override.value)
+        node.declare_parameter(name, values[name], descriptor(name), ignore_override=True)
+    _check_integrator(values['integrator'])
+    return Settings(**values)
+
+
+def _check_unknown_overrides(node):
+    # rclpy keeps the overrides of --params-file and -p only in this attribute (also read
+    # by declare); without the check a misspelt name is silently ignored (ROS_NOTES).
+    unknown = sorted(set(node._parameter_overrides) - set(SPECS) - set(NODE_BUILTINS))
+    unknown = [name for name in unknown if not name.startswith('qos_overrides.')]
+    if unknown:
+        raise ParameterError(f'unknown parameter(s) {unknown}; '
+                             f'this node has {sorted(SPECS)}')
+
+
+def updated(settings, changes):
+    """Settings with ``changes`` (rclpy Parameters) applied, or ParameterError saying why not.
+
+    Parameters that are not this node's own (``use_sim_time``) are passed over.
+    """
+    values = {change.name: coerce(change.name, change.value)
+              for change in changes if change.name in SPECS}
+    if 'integrator' in values:
+        _check_integrator(values['integrator'])
+    return replace(settings, **values)

@@ -1,0 +1,78 @@
+"""Finding the packaged configuration: source tree, pip install and colcon install alike.
+
+``config/`` is installed to ``share/rigid_sim/config``. Where that share directory is
+depends on how the package was installed:
+
+- colcon (or any ROS install): the ament index finds it through ``AMENT_PREFIX_PATH``;
+- ``pip install .`` into a prefix or venv: ``<prefix>/share/rigid_sim``, next to the
+  ``lib/python3.X/site-packages`` that holds this module;
+- the source tree (``pip install -e .`` installs no data files, and a plain venv has no
+  ``AMENT_PREFIX_PATH``): ``config/`` beside the ``rigid_sim`` package directory.
+"""
+import sys
+from pathlib import Path
+
+PACKAGE = 'rigid_sim'
+DEFAULT_SCENE = 'default.yaml'
+_PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+def _ament_share():
+    """The share directory the ament index knows, or None outside a ROS environment."""
+    try:
+        from ament_index_python.packages import (PackageNotFoundError,
+                                                 get_package_share_directory)
+    except ImportError:
+        return None
+    try:
+        return Path(get_package_share_directory(PACKAGE))
+    except (PackageNotFoundError, OSError):  # OSError: no AMENT_PREFIX_PATH (plain venv)
+        return None
+
+
+def config_directories():
+    """Directories that may hold the packaged ``config/``, most specific first.
+
+    Returns
+    -------
+    list of Path
+        Existing directories only.
+    """
+    source_tree = _PACKAGE_DIR.parent
+    # <prefix>/lib/python3.X/site-packages/rigid_sim -> <prefix>
+    install_prefix = _PACKAGE_DIR.parents[3] if len(_PACKAGE_DIR.parents) > 3 else None
+    candidates = [_ament_share()]
+    if (source_tree / 'package.xml').is_file():
+        candidates.append(source_tree)
+    if install_prefix is not None:
+        candidates.append(install_prefix / 'share' / PACKAGE)
+    candidates.append(Path(sys.prefix) / 'share' / PACKAGE)
+    found = []
+    for share in candidates:
+        if share is not None and (share / 'config').is_dir() and share / 'config' not in found:
+            found.append(share / 'config')
+    return found
+
+
+def find_scene(name):
+    """Path of the scene file ``name``.
+
+    An absolute path, or a path relative to the working directory, is taken as it is;
+    a bare file name not found there is looked up in the packaged ``config/scenes``.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming every place that was searched.
+    """
+    path = Path(name).expanduser()
+    if path.is_file():
+        return path.resolve()
+    searched = [str(path.resolve())]
+    if not path.is_absolute() and len(path.parts) == 1:
+        for config in config_directories():
+            packaged = config / 'scenes' / path
+            if packaged.is_file():
+                return packaged
+            searched.append(str(packaged))
+    raise FileNotFoundError(f'scene file {name!r} not found; searched {searched}')

@@ -1,0 +1,66 @@
+"""Isolation and harnesses for the tests that speak ROS.
+
+Every run gets its own ROS_DOMAIN_ID (from the pid), discovery limited to this machine
+(ROS_NOTES: unset, DDS multicasts out of the network interface) and a temporary log
+directory, set here before any test starts rclpy or a node process. In-process tests narrow
+discovery further, to OFF. The harnesses themselves are in ``ros_harness.py``.
+"""
+import os
+import shutil
+import tempfile
+
+import pytest
+
+ROS_LOG_DIR = tempfile.mkdtemp(prefix='rigid_sim_test_logs_')
+os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)  # 1..101: valid on Linux
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'  # subprocess tests need localhost
+os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated, and it overrides the range
+os.environ.pop('ROS_STATIC_PEERS', None)
+os.environ['ROS_LOG_DIR'] = ROS_LOG_DIR
+os.environ['RCUTILS_LOGGING_BUFFERED_STREAM'] = '0'  # a node process's lines arrive at once
+
+
+def pytest_sessionfinish(session, exitstatus):
+    shutil.rmtree(ROS_LOG_DIR, ignore_errors=True)
+
+
+@pytest.fixture
+def ros_context(monkeypatch):
+    """A fresh rclpy context with discovery OFF: only nodes of this process meet."""
+    import rclpy
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    yield context
+    rclpy.try_shutdown(context=context)
+
+
+@pytest.fixture
+def write_scene(tmp_path):
+    """Write YAML text to a scene file in the test's directory and return its path."""
+    def write(text, name='scene.yaml'):
+        path = tmp_path / name
+        path.write_text(text)
+        return str(path)
+    return write
+
+
+@pytest.fixture
+def harness(ros_context):
+    """Start a rigid_sim node and a probe node in one executor: ``harness(scene, **params)``.
+
+    The node's wall-clock timer is cancelled: the test advances it with ``tick()``.
+    """
+    from rclpy.executors import SingleThreadedExecutor
+
+    from ros_harness import SimHarness
+    executor = SingleThreadedExecutor(context=ros_context)
+    made = []
+
+    def start(scene, **params):
+        made.append(SimHarness(ros_context, executor, scene, params))
+        return made[-1]
+    yield start
+    for sim in made:
+        sim.destroy()
+    executor.shutdown()

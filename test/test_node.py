@@ -1,0 +1,288 @@
+"""The node's physics as seen over ROS: inputs in, exact state out, services.
+
+Each test starts the node and a probe in one executor (see ``ros_harness``), advances the
+node tick by tick and checks what the probe received against physics worked out here.
+Time steps are binary fractions (1/8, 1/64 s) so that simulated times add up exactly.
+"""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.spatial.transform import Rotation
+from std_srvs.srv import SetBool, Trigger
+from visualization_msgs.msg import Marker
+
+from rigid_sim import conversions
+
+MASS = 2.0                        # kg, the box
+SIZE = np.array([0.4, 0.2, 0.1])  # m, the box
+X0 = np.array([1.0, -2.0, 0.5])   # m, initial position of the box
+V0 = np.array([0.3, 0.0, -0.1])   # m/s, initial velocity of the box
+THRUSTER = np.array([-0.2, 0.0, 0.0])  # m, body frame; the box's centre of mass is its origin
+MAX_FORCE, MAX_TORQUE = 100.0, 10.0
+BALL_MASS, BALL_RADIUS, BALL_SPIN = 1.0, 0.1, np.array([0.0, 0.0, 3.0])
+STEP = 0.125  # s, exact in binary
+
+SCENE = f"""
+world_frame: world
+limits: {{max_force: {MAX_FORCE}, max_torque: {MAX_TORQUE}}}
+bodies:
+  - name: box
+    shape: {{type: box, size: {SIZE.tolist()}}}
+    mass: {MASS}
+    pose: {{position: {X0.tolist()}}}
+    twist: {{linear: {V0.tolist()}}}
+    points: {{thruster: {THRUSTER.tolist()}}}
+  - name: ball
+    shape: {{type: sphere, radius: {BALL_RADIUS}}}
+    mass: {BALL_MASS}
+    pose: {{position: [0.0, 1.0, 0.0]}}
+    twist: {{angular: {BALL_SPIN.tolist()}}}
+    wrench_input: false
+  - name: rod
+    shape: {{type: cylinder, radius: 0.05, length: 1.0}}
+    mass: 1.0
+    pose: {{position: [0.0, -1.0, 0.0]}}
+"""
+# RK4 integrates constant-force motion (a polynomial of degree 2) exactly; the tests of the
+# node's wiring should not depend on which integrator is the default.
+EXACT_FOR_CONSTANT_FORCE = {'integrator': 'rk4'}
+
+
+@pytest.fixture
+def box(harness, write_scene):
+    """The three-body scene, stepped by STEP per tick, wrenches held until replaced."""
+    return harness(write_scene(SCENE), time_step=STEP, wrench_timeout=0.0,
+                   **EXACT_FOR_CONSTANT_FORCE)
+
+
+def free_flight(force, t, x0=X0, v0=V0):
+    """Position and velocity of the box under a constant world ``force`` for ``t`` s."""
+    force = np.asarray(force, dtype=float)
+    return x0 + v0 * t + force * t ** 2 / (2 * MASS), v0 + force * t / MASS
+
+
+def test_world_force_at_centre_of_mass_accelerates_by_force_over_mass(box):
+    """A constant world force F at the centre of mass gives x = x0 + v0 t + F t^2 / 2M."""
+    force = [3.0, -1.0, 2.0]
+    box.push('box', 'world', force)
+    box.tick(8)
+    position, orientation, velocity, angular_velocity, t = box.state('box')
+    expected_position, expected_velocity = free_flight(force, 1.0)
+    assert t == 1.0
+    np.testing.assert_allclose(position, expected_position, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(velocity, expected_velocity, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(orientation, [0, 0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(angular_velocity, 0.0, atol=1e-15)
+
+
+def test_body_force_at_named_point_torques_by_lever_cross_force(harness, write_scene):
+    """A body-axes force f at point p gives torque (p - x) x f and turns with the body.
+
+    Box at rest, f = (0, 1, 0) N in box axes at the thruster (-0.2, 0, 0): the torque
+    about z is -0.2 N m, so omega_z = -0.2 t / Izz and theta = -0.1 t^2 / Izz with
+    Izz = M (a^2 + b^2) / 12. The force turns with the box: in world axes it is
+    (-sin theta, cos theta, 0), and the momentum is its integral over time.
+    """
+    still = SCENE.replace(f'twist: {{linear: {V0.tolist()}}}', '')
+    sim = harness(write_scene(still), time_step=1 / 64, wrench_timeout=0.0,
+                  **EXACT_FOR_CONSTANT_FORCE)
+    sim.push('box', 'box/thruster', [0.0, 1.0, 0.0])
+    sim.tick(32)
+    position, orientation, velocity, angular_velocity, t = sim.state('box')
+    inertia_z = MASS * (SIZE[0] ** 2 + SIZE[1] ** 2) / 12
+    torque_z = np.cross(THRUSTER, [0.0, 1.0, 0.0])[2]
+    assert torque_z == pytest.approx(-0.2)
+
+    def angle(s):
+        return 0.5 * torque_z * s ** 2 / inertia_z
+
+    def world_velocity(s):
+        return np.array([quad(lambda u: -math.sin(angle(u)), 0, s)[0],
+                         quad(lambda u: math.cos(angle(u)), 0, s)[0], 0.0]) / MASS
+
+    displacement = [quad(lambda s: world_velocity(s)[i], 0, t)[0] for i in range(2)]
+    np.testing.assert_allclose(angular_velocity, [0, 0, torque_z * t / inertia_z], atol=1e-12)
+    expected_orientation = Rotation.from_rotvec([0, 0, angle(t)]).as_quat()
+    np.testing.assert_allclose(orientation, expected_orientation, atol=1e-6)
+    np.testing.assert_allclose(velocity, world_velocity(t), atol=1e-6)
+    np.testing.assert_allclose(position[:2], X0[:2] + displacement, atol=1e-6)
+    assert position[2] == X0[2]
+
+
+def test_wrenches_from_two_frames_add_and_same_frame_replaces(box):
+    """Forces from frame_ids 'world' and '' act together; a new 'world' one replaces the old.
+
+    No torque acts, so body axes stay world axes and the accelerations are (F1 + F2) / M.
+    """
+    world_force, body_force, new_world_force = [1.0, 0, 0], [0, 2.0, 0], [0, 0, -4.0]
+    box.push('box', 'world', world_force)
+    box.push('box', '', body_force)
+    box.tick(4)
+    x_half, v_half = free_flight(np.add(world_force, body_force), 0.5)
+    np.testing.assert_allclose(box.state('box')[0], x_half, atol=1e-12)
+    box.push('box', 'world', new_world_force)
+    box.tick(4)
+    expected = free_flight(np.add(new_world_force, body_force), 0.5, x_half, v_half)
+    position, _, velocity, _, _ = box.state('box')
+    np.testing.assert_allclose(position, expected[0], atol=1e-12)
+    np.testing.assert_allclose(velocity, expected[1], atol=1e-12)
+
+
+def test_held_wrench_stops_after_timeout(harness, write_scene):
+    """A wrench held for wrench_timeout T of simulated time delivers the impulse F T, no more."""
+    sim = harness(write_scene(SCENE), time_step=STEP, wrench_timeout=0.5,
+                  **EXACT_FOR_CONSTANT_FORCE)
+    force = np.array([0.0, 4.0, 0.0])
+    sim.push('box', 'world', force)
+    sim.tick(4)
+    np.testing.assert_allclose(sim.state('box')[2], V0 + force * 0.5 / MASS, atol=1e-12)
+    sim.tick(4)
+    x_half, v_half = free_flight(force, 0.5)
+    position, _, velocity, _, t = sim.state('box')
+    assert t == 1.0
+    np.testing.assert_allclose(velocity, v_half, atol=1e-12)
+    np.testing.assert_allclose(position, x_half + v_half * 0.5, atol=1e-12)
+
+
+@pytest.mark.parametrize('frame_id, force, torque, reason', [
+    ('world', [math.nan, 0, 0], [0, 0, 0], 'non-finite'),
+    ('box', [0, 0, 0], [0, math.inf, 0], 'non-finite'),
+    ('box/nowhere', [1.0, 0, 0], [0, 0, 0], 'unknown frame_id'),
+    ('world', [MAX_FORCE * 1.01, 0, 0], [0, 0, 0], 'max_force'),
+    ('box', [0, 0, 0], [0, 0, MAX_TORQUE * 1.01], 'max_torque'),
+])
+def test_refused_wrench_changes_nothing_and_is_counted(box, frame_id, force, torque, reason):
+    """A refused wrench neither acts nor replaces the wrench held under its frame_id."""
+    held = [2.0, 0.0, 0.0]
+    box.push('box', 'world', held)
+    box.tick(4)
+    box.push('box', frame_id, force, torque)
+    box.tick(4)
+    position, orientation, velocity, angular_velocity, _ = box.state('box')
+    expected_position, expected_velocity = free_flight(held, 1.0)
+    np.testing.assert_allclose(position, expected_position, atol=1e-12)
+    np.testing.assert_allclose(velocity, expected_velocity, atol=1e-12)
+    np.testing.assert_allclose(orientation, [0, 0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(angular_velocity, 0.0, atol=1e-15)
+    values = box.diagnostics()
+    assert values['refused inputs'] == '1'
+    assert values['refused inputs box'] == '1'
+    assert reason in values['last refused input']
+
+
+def test_pause_freezes_time_and_pose_while_topics_keep_coming(box):
+    """Paused, every tick still publishes, at the same simulated time and the same pose."""
+    box.push('box', 'world', [1.0, 1.0, 1.0])
+    box.tick(2)
+    assert box.call(SetBool, 'pause', SetBool.Request(data=True)).success
+    frozen = box.state('box')
+    received = len(box.received[box.topic('box/pose')])
+    box.tick(3)
+    assert len(box.received[box.topic('box/pose')]) == received + 3
+    for now, before in zip(box.state('box'), frozen):
+        np.testing.assert_array_equal(now, before)
+    assert conversions.to_seconds(box.latest('/clock').clock) == 2 * STEP
+    assert box.call(SetBool, 'pause', SetBool.Request(data=False)).success
+    box.tick(1)
+    expected_position, _ = free_flight([1.0, 1.0, 1.0], 3 * STEP)
+    np.testing.assert_allclose(box.state('box')[0], expected_position, atol=1e-12)
+
+
+def test_reset_returns_initial_state_at_time_zero_and_drops_wrenches(box):
+    """After reset: time 0, the scene's initial pose and twist, and no held wrench acts."""
+    box.push('box', 'box/thruster', [0.0, 5.0, 0.0])
+    box.tick(4)
+    assert box.call(Trigger, 'reset', Trigger.Request()).success
+    box.call(SetBool, 'pause', SetBool.Request(data=True))
+    box.tick(1)
+    position, orientation, velocity, angular_velocity, t = box.state('box')
+    assert t == 0.0
+    np.testing.assert_array_equal(position, X0)
+    np.testing.assert_array_equal(orientation, [0, 0, 0, 1])
+    np.testing.assert_array_equal(velocity, V0)
+    np.testing.assert_array_equal(angular_velocity, [0, 0, 0])
+    box.call(SetBool, 'pause', SetBool.Request(data=False))
+    box.tick(4)
+    position, orientation, velocity, _, t = box.state('box')
+    assert t == 0.5
+    np.testing.assert_allclose(position, X0 + V0 * t, atol=1e-12)
+    np.testing.assert_allclose(velocity, V0, atol=1e-12)
+
+
+def test_odometry_twist_and_pose_agree_for_a_body_with_offset_centre_of_mass(
+        harness, write_scene):
+    """PoseStamped, TwistStamped and Odometry describe one motion of the body frame.
+
+    The L block's centre of mass is off its frame origin, so the origin's velocity differs
+    from the centre of mass's by omega x (origin - com). Central differences of the
+    published poses over 2 dt must match the published world twist to O(dt^2), and the
+    odometry twist is the same twist in body axes (REP-105): R^T v, R^T omega.
+    """
+    mesh = Path(__file__).resolve().parents[1] / 'config' / 'meshes' / 'l_block.obj'
+    scene = write_scene(f"""
+bodies:
+  - name: l_block
+    shape: {{type: mesh, file: {mesh}}}
+    mass: 3.0
+    pose: {{position: [0.1, 0.2, 0.3], orientation: [0.2, -0.1, 0.3, 0.9]}}
+    twist: {{linear: [0.1, 0.0, -0.2], angular: [0.5, 1.0, 2.0]}}
+""")
+    step = 1e-3
+    sim = harness(scene, time_step=step)
+    assert np.linalg.norm(sim.sim.world.bodies.com_in_body[0]) > 0.05  # the premise
+    sim.tick(3)
+    poses = [conversions.pose_arrays(m.pose) for m in sim.received[sim.topic('l_block/pose')]]
+    twist = sim.received[sim.topic('l_block/twist')][1].twist
+    velocity = conversions.vector_array(twist.linear)
+    angular_velocity = conversions.vector_array(twist.angular)
+    (before, q_before), (_, q_middle), (after, q_after) = poses
+    np.testing.assert_allclose((after - before) / (2 * step), velocity, atol=1e-5)
+    turn = Rotation.from_quat(q_after) * Rotation.from_quat(q_before).inv()
+    np.testing.assert_allclose(turn.as_rotvec() / (2 * step), angular_velocity, atol=1e-5)
+    odometry = sim.received[sim.topic('l_block/odom')][1]
+    assert (odometry.header.frame_id, odometry.child_frame_id) == ('world', 'l_block')
+    assert odometry.header.stamp == sim.received[sim.topic('l_block/pose')][1].header.stamp
+    assert odometry.pose.pose == sim.received[sim.topic('l_block/pose')][1].pose
+    world_from_body = Rotation.from_quat(q_middle).as_matrix()
+    body_twist = odometry.twist.twist
+    np.testing.assert_allclose(conversions.vector_array(body_twist.linear),
+                               world_from_body.T @ velocity, atol=1e-12)
+    np.testing.assert_allclose(conversions.vector_array(body_twist.angular),
+                               world_from_body.T @ angular_velocity, atol=1e-12)
+    marker, = sim.latest('markers').markers  # RViz draws the same mesh at the same pose
+    assert (marker.type, marker.mesh_resource) == (Marker.MESH_RESOURCE, f'file://{mesh}')
+    assert marker.pose == sim.latest('l_block/pose').pose
+
+
+def test_pose_array_and_markers_show_every_body_in_scene_order(box):
+    """PoseArray and MarkerArray list the bodies in scene order, with their shapes' sizes."""
+    box.tick(1)
+    poses = box.latest('poses').poses
+    assert len(poses) == 3
+    for pose, name in zip(poses, ('box', 'ball', 'rod')):
+        assert pose == box.latest(f'{name}/pose').pose
+    markers = box.latest('markers').markers
+    assert [m.type for m in markers] == [Marker.CUBE, Marker.SPHERE, Marker.CYLINDER]
+    assert [m.pose for m in markers] == list(poses)
+    sizes = [conversions.vector_array(m.scale) for m in markers]
+    np.testing.assert_allclose(sizes, [SIZE, [2 * BALL_RADIUS] * 3, [0.1, 0.1, 1.0]])
+
+
+def test_diagnostics_report_energy_and_momentum_of_free_bodies(box):
+    """Free bodies keep E = sum M v^2/2 + omega.I omega/2, P = sum M v, L = sum(I w + x x P)."""
+    box.tick(4)
+    values = box.diagnostics()
+    ball_inertia = 0.4 * BALL_MASS * BALL_RADIUS ** 2
+    energy = 0.5 * MASS * V0 @ V0 + 0.5 * ball_inertia * BALL_SPIN @ BALL_SPIN
+    momentum = MASS * V0
+    angular_momentum = np.cross(X0, momentum) + ball_inertia * BALL_SPIN
+    assert float(values['energy [J]']) == pytest.approx(energy, rel=1e-12)
+    np.testing.assert_allclose(np.fromstring(values['linear momentum [kg m/s]'], sep=' '),
+                               momentum, atol=1e-12)
+    np.testing.assert_allclose(
+        np.fromstring(values['angular momentum about the world origin [kg m^2/s]'], sep=' '),
+        angular_momentum, atol=1e-8)
+    assert values['simulated time [s]'] == '0.5'

@@ -1,0 +1,154 @@
+"""Parameters: declared defaults, integer literals, refusals at start and at runtime.
+
+A refused value at start raises ParameterError (the executable turns it into a message and
+exit status 1, see test_process.py); at runtime it is refused with a reason and the node
+keeps running with its previous values.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from rclpy.parameter import Parameter
+
+from rigid_sim import conversions
+from rigid_sim.node import RigidSimNode
+from rigid_sim.parameters import SPECS, ParameterError
+
+SHIPPED_PARAMETERS = Path(__file__).resolve().parents[1] / 'config' / 'rigid_sim.yaml'
+SCENE = """
+bodies:
+  - name: box
+    shape: {type: box, size: [0.4, 0.2, 0.1]}
+    mass: 2.0
+    twist: {linear: [1.0, 0.0, 0.0]}
+"""
+OTHER_SCENE = """
+bodies:
+  - name: puck
+    shape: {type: cylinder, radius: 0.1, length: 0.05}
+    mass: 0.5
+    pose: {position: [0.0, 0.0, 2.0]}
+"""
+MALFORMED_SCENE = """
+bodies:
+  - name: box
+    shape: {type: box, size: [0.4, 0.2]}
+    mass: 2.0
+"""
+
+
+def clock_nanoseconds(sim):
+    return [m.clock.sec * 10 ** 9 + m.clock.nanosec for m in sim.received['/clock']]
+
+
+def test_integer_literals_accepted_and_time_step_defaults_to_one_over_rate(
+        ros_context, write_scene):
+    """-p rate:=50 (an integer) is 50 Hz; time_step = 1/rate keeps the real-time factor 1."""
+    node = RigidSimNode(context=ros_context, cli_args=[
+        '--ros-args', '-p', 'rate:=50', '-p', 'wrench_timeout:=2', '-p', 'tolerance:=1',
+        '-p', f'scene:={write_scene(SCENE)}'])
+    settings = node.settings
+    assert (settings.rate, settings.wrench_timeout, settings.tolerance) == (50.0, 2.0, 1.0)
+    assert settings.time_step == 1 / 50 and settings.publish_rate == 50.0
+    assert node.timer.timer_period_ns == 20_000_000
+    node.destroy_node()
+
+
+def test_clock_advances_by_time_step_per_tick(harness, write_scene):
+    """/clock and every stamp advance by time_step per tick, whatever the substeps."""
+    sim = harness(write_scene(SCENE), rate=50, substeps=4)
+    sim.tick(5)
+    steps = np.diff([0] + clock_nanoseconds(sim))
+    np.testing.assert_allclose(steps, 2 * 10 ** 7, atol=1)
+    assert sim.latest('box/pose').header.stamp == sim.latest('/clock').clock
+
+
+def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, write_scene):
+    """rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
+    sim = harness(write_scene(SCENE), rate=100.0, publish_rate=25.0, time_step=0.125)
+    sim.tick(8)
+    assert len(sim.received['/clock']) == 8
+    stamps = [conversions.to_seconds(m.header.stamp)
+              for m in sim.received[sim.topic('box/pose')]]
+    assert stamps == [0.125, 0.625]
+    assert len(sim.received[sim.topic('poses')]) == 2
+
+
+@pytest.mark.parametrize('name, value, reason', [
+    ('rate', -1.0, 'outside the range'), ('rate', 'fast', 'expected a number'),
+    ('rate', True, 'expected a number'), ('time_step', 0.0, 'outside the range'),
+    ('substeps', 0, 'outside the range'), ('substeps', 2.5, 'expected an integer'),
+    ('publish_rate', float('nan'), 'outside the range'),
+    ('integrator', 'leapfrog', 'unknown integrator'), ('tolerance', 0, 'outside the range'),
+    ('wrench_timeout', -0.1, 'outside the range'), ('world_frame', ' ', 'must not be empty'),
+    ('publish_clock', 'yes', 'expected a bool'),
+])
+def test_bad_value_at_start_is_refused_naming_parameter_and_reason(
+        ros_context, write_scene, name, value, reason):
+    """A value outside a parameter's type or range stops the node before it simulates."""
+    overrides = [Parameter('scene', value=write_scene(SCENE)), Parameter(name, value=value)]
+    with pytest.raises(ParameterError, match=f"parameter '{name}'.*{reason}"):
+        RigidSimNode(context=ros_context, parameter_overrides=overrides)
+
+
+def test_misspelt_parameter_in_params_file_is_refused(ros_context, write_scene, tmp_path):
+    """A params-file key that names no parameter (rat for rate) is refused, not ignored."""
+    params = tmp_path / 'params.yaml'
+    params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'scene': write_scene(SCENE), 'rat': 200.0}}}))
+    with pytest.raises(ParameterError, match=r"unknown parameter\(s\) \['rat'\]"):
+        RigidSimNode(context=ros_context, cli_args=['--ros-args', '--params-file', str(params)])
+
+
+def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context):
+    """config/rigid_sim.yaml names each parameter once, with the value it has by default."""
+    listed = yaml.safe_load(SHIPPED_PARAMETERS.read_text())['/**']['ros__parameters']
+    assert sorted(listed) == sorted(SPECS)
+    with_file = RigidSimNode(context=ros_context, cli_args=[
+        '--ros-args', '--params-file', str(SHIPPED_PARAMETERS)])
+    without_file = RigidSimNode(context=ros_context)
+    assert with_file.settings == without_file.settings
+    with_file.destroy_node()
+    without_file.destroy_node()
+
+
+def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_scene):
+    """ros2 param set with a bad value or a malformed scene: refused with the reason, and
+    the node keeps simulating its scene with its previous settings."""
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    before = sim.sim.settings
+    rate, = sim.set_parameters(rate=-5.0)
+    assert not rate.successful and 'rate' in rate.reason
+    integrator, = sim.set_parameters(integrator='leapfrog')
+    assert not integrator.successful and 'rk4' in integrator.reason
+    malformed = write_scene(MALFORMED_SCENE, 'malformed.yaml')
+    scene, = sim.set_parameters(scene=malformed)
+    assert not scene.successful
+    assert malformed in scene.reason and 'bodies[0].shape.size' in scene.reason
+    assert 'list of 3 numbers' in scene.reason
+    assert sim.sim.settings == before and sim.sim.get_parameter('rate').value == before.rate
+    sim.tick(8)
+    position, _, velocity, _, t = sim.state('box')
+    assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
+
+
+def test_runtime_changes_take_effect(harness, write_scene):
+    """Accepted changes apply at once: rate (an integer literal) sets the timer period,
+    world_frame the stamps' frame, integrator the method, scene a new world at time 0."""
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    sim.tick(2)
+    assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',
+                                                        integrator='euler'))
+    assert sim.sim.timer.timer_period_ns == 50_000_000
+    assert sim.sim.world.integrator.name == 'euler'
+    sim.tick(1)
+    assert sim.latest('box/odom').header.frame_id == 'map'
+    assert sim.state('box')[4] == 0.375  # the integrator changed, not the state or time
+    result, = sim.set_parameters(scene=write_scene(OTHER_SCENE, 'other.yaml'))
+    assert result.successful
+    assert [body.name for body in sim.sim.scene.bodies] == ['puck']
+    sim.listen()
+    sim.tick(1)
+    position, _, _, _, t = sim.state('puck')
+    assert t == 0.125 and position.tolist() == [0.0, 0.0, 2.0]

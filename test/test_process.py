@@ -1,0 +1,106 @@
+"""The ``rigid_sim_node`` executable as its own process, talking over DDS.
+
+The environment comes from conftest.py (this run's ROS_DOMAIN_ID, discovery on localhost);
+each node process also gets a namespace of its own. Waits are on received messages and
+matched endpoints with generous timeouts, never on sleeps.
+"""
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import rclpy
+import yaml
+from geometry_msgs.msg import PoseStamped, WrenchStamped
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from ros_harness import TIMEOUT, spin_until
+
+EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
+NAMESPACE = f'/t{os.getpid()}'
+START_TIMEOUT = 30.0  # s: importing numpy, scipy and rclpy in a new process, then discovery
+
+
+def start_node(*ros_arguments, cwd):
+    """Start the installed console script with ``--ros-args`` in this run's namespace."""
+    assert EXECUTABLE.is_file(), f'{EXECUTABLE} missing: pip install -e . first'
+    return subprocess.Popen([str(EXECUTABLE), '--ros-args', '-r', f'__ns:={NAMESPACE}',
+                             *ros_arguments], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+
+
+@pytest.fixture
+def probe():
+    """A node in this test process, on this run's domain, with its executor."""
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = Node('probe', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    yield node, executor
+    executor.shutdown()
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+
+
+def test_node_process_publishes_poses_and_moves_under_a_wrench(probe, tmp_path):
+    """The packaged wrenches scene, found by bare name, runs; a 10 N world force along x
+    from another process accelerates the cart along x only (no gravity in that scene)."""
+    node, executor = probe
+    process = start_node('-p', 'scene:=wrenches.yaml', cwd=tmp_path)
+    try:
+        poses = []
+        node.create_subscription(PoseStamped, f'{NAMESPACE}/rigid_sim/cart/pose',
+                                 poses.append, 10)
+        spin_until(executor, lambda: poses, START_TIMEOUT, 'first cart pose')
+        start = poses[-1].pose.position
+        push = node.create_publisher(WrenchStamped, f'{NAMESPACE}/rigid_sim/cart/wrench', 10)
+        spin_until(executor, lambda: push.get_subscription_count() >= 1, TIMEOUT,
+                   'wrench topic matched')
+        message = WrenchStamped()
+        message.header.frame_id = 'world'
+        message.wrench.force.x = 10.0
+        push.publish(message)
+        spin_until(executor, lambda: poses[-1].pose.position.x > start.x + 0.05, TIMEOUT,
+                   'cart moved along x')
+        moved = poses[-1].pose.position
+        assert (moved.y, moved.z) == (start.y, start.z)
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=TIMEOUT) == 0
+    finally:
+        process.kill()
+        output = process.communicate()[0]
+    assert 'simulating 3 bodies' in output and 'wrenches.yaml' in output
+
+
+def write_misspelt_parameters(tmp_path):
+    path = tmp_path / 'params.yaml'
+    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {'time_stepp': 0.01}}}))
+    return ['--params-file', str(path)]
+
+
+def write_malformed_scene(tmp_path):
+    path = tmp_path / 'bad_scene.yaml'
+    path.write_text('bodies:\n  - name: box\n    shape: {type: box, size: [1.0, 1.0]}\n'
+                    '    mass: 1.0\n')
+    return ['-p', f'scene:={path}']
+
+
+@pytest.mark.parametrize('arguments, expected', [
+    (lambda tmp: ['-p', 'rate:=-3'], ["parameter 'rate'", '-3', 'outside the range']),
+    (lambda tmp: ['-p', 'integrator:=leapfrog'], ['unknown integrator', 'rk4']),
+    (write_misspelt_parameters, ["unknown parameter(s) ['time_stepp']"]),
+    (write_malformed_scene, ['bad_scene.yaml', 'bodies[0].shape.size', 'list of 3 numbers']),
+    (lambda tmp: ['-p', 'scene:=nowhere.yaml'], ["'nowhere.yaml' not found"]),
+])
+def test_refused_start_names_the_reason_and_exits_nonzero(tmp_path, arguments, expected):
+    """A bad parameter or scene stops the process at once with status 1 and says why."""
+    process = start_node(*arguments(tmp_path), cwd=tmp_path)
+    output = process.communicate(timeout=START_TIMEOUT)[0]
+    assert process.returncode == 1, output
+    assert 'refused to start' in output
+    for words in expected:
+        assert words in output
