@@ -1,0 +1,35 @@
+"""``rigid_sim_bench``: the benchmark console script (entry point ``cli:main``)."""
+import argparse
+import sys
+
+from rigid_sim.bench import MissingPackage, accuracy, inertia_cost, stability, throughput
+
+SUBCOMMANDS = (
+    ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
+    ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
+    ('stability', stability, 'the hard cases through every integrator'),
+    ('throughput', throughput, 'CPU time per body-step against the number of bodies'),
+)
+
+
+def build_parser():
+    """The argument parser of every subcommand."""
+    parser = argparse.ArgumentParser(
+        prog='rigid_sim_bench', description='rigid_sim benchmarks: what accuracy costs in time.')
+    commands = parser.add_subparsers(dest='command', required=True)
+    for name, module, summary in SUBCOMMANDS:
+        sub = commands.add_parser(name, help=summary, description=summary)
+        module.add_arguments(sub)
+        sub.set_defaults(run=module.main)
+    return parser
+
+
+def main(argv=None):
+    """Parse ``argv`` (default ``sys.argv[1:]``) and run the subcommand; exit status."""
+    parser = build_parser()
+    args = parser.parse_args(sys.argv[1:] if argv is None else list(argv))
+    try:
+        args.run(args)
+    except MissingPackage as error:
+        parser.exit(2, f'rigid_sim_bench {args.command}: error: {error}\n')
+    return 0

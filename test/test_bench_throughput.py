@@ -1,0 +1,41 @@
+"""``rigid_sim_bench throughput`` runs end to end on its quick configuration."""
+import math
+
+from rigid_sim.bench import cli
+from rigid_sim.bench.throughput import GUARDED, QUICK
+from rigid_sim.core.integrators import REGISTRY
+
+
+def table_rows(text, title):
+    """``{first cell: other cells}`` of the Markdown table under the heading ``title``."""
+    block = text.split(title, 1)[1].split('###', 1)[0]
+    rows = [line.split('|')[1:-1] for line in block.splitlines()
+            if line.startswith('| ') and '---' not in line]
+    return {cells[0].strip(): [cell.strip() for cell in cells[1:]] for cells in rows[1:]}
+
+
+def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
+    """Every registered integrator (and MuJoCo's Euler and RK4, installed with the test extra)
+    has a positive, finite time per body-step at each N; each effect's cost is listed; the
+    world without effects made no call into effect code; the Markdown section and the plot are
+    written, keeping hand-written text around the section."""
+    out = tmp_path / 'performance.md'
+    out.write_text('# Hand-written title\n')
+    parser = cli.build_parser()
+    args = parser.parse_args(['throughput', '--quick', '--out', str(out)])
+    results = args.run(args)
+    printed = capsys.readouterr().out
+    per_body_step = table_rows(printed, 'CPU time per body-step')
+    expected = set(REGISTRY) | {GUARDED, 'mujoco Euler', 'mujoco RK4'}
+    assert set(per_body_step) == expected
+    for name, cells in per_body_step.items():
+        assert len(cells) == len(QUICK['sizes'])
+        assert all(0.0 < float(cell) < math.inf for cell in cells), name
+    assert set(results) == expected
+    effects = table_rows(printed, 'of each effect')
+    assert set(effects) == {'gravity', 'damping', 'springs', 'wrench'}
+    assert 'made 0 calls into' in printed
+    written = out.read_text()
+    assert written.startswith('# Hand-written title')
+    assert table_rows(written, 'CPU time per body-step') == per_body_step
+    assert (tmp_path / 'performance.png').read_bytes()[:4] == b'\x89PNG'
