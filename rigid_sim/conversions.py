@@ -84,8 +84,11 @@ class StateMessages:
         for odometry, pose in zip(self.odometry, shared_poses):
             odometry.pose.pose = pose
 
-    def fill(self, snapshot):
-        """Write the pose, world twist and body twist of every body at ``snapshot``."""
+    def fill(self, snapshot, indices):
+        """Write the pose, world twist and body twist of the bodies ``indices`` at ``snapshot``.
+
+        Every message's stamp is the snapshot's time; the others keep their last values.
+        """
         origin, orientation = snapshot.body_frame_pose()
         velocity, angular_velocity = snapshot.body_frame_twist()
         # REP-105: odometry twist in the child (body) frame's axes.
@@ -94,10 +97,11 @@ class StateMessages:
         to_time(snapshot.time, self.stamp)
         rows = np.hstack((origin, orientation, velocity, angular_velocity, velocity_body,
                           angular_body)).tolist()
-        for row, pose, twist, odometry in zip(rows, self.poses, self.twists, self.odometry):
-            _set_pose(pose.pose, row[0:7])
-            _set_twist(twist.twist, row[7:13])
-            _set_twist(odometry.twist.twist, row[13:19])
+        for index in indices:
+            row = rows[index]
+            _set_pose(self.poses[index].pose, row[0:7])
+            _set_twist(self.twists[index].twist, row[7:13])
+            _set_twist(self.odometry[index].twist.twist, row[13:19])
 
 
 def _set_pose(pose, values):

@@ -28,6 +28,10 @@ from rigid_sim.resources import find_scene
 NODE_NAME = 'rigid_sim'
 DIAGNOSTICS_PERIOD = 1.0  # s of wall time; /diagnostics aggregators expect about 1 Hz
 WARNING_PERIOD = 2.0      # s of wall time between two warnings about refused wrenches
+# Outputs nobody subscribes to are neither filled nor sent. Who listens is asked again this
+# often (s of wall time; ~1.5 us per topic): a new subscriber waits at most this long on top
+# of discovery, which takes 0.3-0.7 s between processes anyway.
+LISTENER_REFRESH = 0.5
 QUEUE_DEPTH = 10
 
 
@@ -44,6 +48,7 @@ class TickStats:
         self.ticks = 0
         self.step_total = 0.0   # s of wall time spent applying inputs and integrating
         self.step_max = 0.0     # s, the longest of them
+        self.failed_ticks = 0   # ticks cut short by a step the world gave up
         self.sim_start = sim_time
         self.wall_start = time.monotonic()
 
@@ -122,6 +127,7 @@ class RigidSimNode(Node):
                     lambda message, index=index: self._inbox.append((index, message)),
                     QUEUE_DEPTH))
         self._build_messages()
+        self._listeners_due = -math.inf
         self._inbox.clear()
         self.refused = {body.name: 0 for body in self.scene.bodies}
         self._last_refusal = ''
@@ -141,15 +147,29 @@ class RigidSimNode(Node):
         started = time.perf_counter()
         self._apply_inputs()
         if not self.paused:
-            step = self.settings.time_step / self.settings.substeps
-            for _ in range(self.settings.substeps):
-                self.world.step(step)
+            self._advance()
         self._stats.add(time.perf_counter() - started)
         if self.settings.publish_clock:
             self._clock_publisher.publish(conversions.clock(self.world.time))
         if self.ticks % self.settings.publish_every == 0:
             self.publish_state()
         self.ticks += 1
+
+    def _advance(self):
+        """Integrate one tick; stop at a step the world gives up, keeping its last good state.
+
+        The world never stores a non-finite value, so what is published stays finite; time
+        does not advance past the failed step and the next tick tries again.
+        """
+        step = self.settings.time_step / self.settings.substeps
+        for _ in range(self.settings.substeps):
+            if not self.world.step(step):
+                self._stats.failed_ticks += 1
+                self.get_logger().error(
+                    f'gave up a step at t = {self.world.time:g} s, state kept: '
+                    f'{self.world.diagnostics.last_failure}',
+                    throttle_duration_sec=WARNING_PERIOD)
+                return
 
     def _apply_inputs(self):
         """Hold every stored wrench in arrival order; a refused one changes nothing."""
@@ -172,20 +192,39 @@ class RigidSimNode(Node):
                                           throttle_duration_sec=WARNING_PERIOD)
 
     def publish_state(self):
-        """Publish pose, twists and odometry of every body, the PoseArray and the markers."""
-        self._messages.fill(self.world.snapshot())
-        messages = zip(self._messages.poses, self._messages.twists, self._messages.odometry)
-        for publishers, outputs in zip(self._outputs, messages):
-            for publisher, message in zip(publishers, outputs):
-                publisher.publish(message)
-        self._pose_array_publisher.publish(self._messages.pose_array)
-        self._markers_publisher.publish(self._messages.markers)
+        """Publish pose, twists and odometry of every body, the PoseArray and the markers.
+
+        Only outputs with subscribers are filled and sent (see ``LISTENER_REFRESH``).
+        """
+        now = time.monotonic()
+        if now >= self._listeners_due:
+            self._listeners_due = now + LISTENER_REFRESH
+            self._listened = [[publisher.get_subscription_count() > 0 for publisher in outputs]
+                              for outputs in self._outputs]
+            self._aggregates = [publisher for publisher in (self._pose_array_publisher,
+                                                            self._markers_publisher)
+                                if publisher.get_subscription_count() > 0]
+        listened = [index for index, wanted in enumerate(self._listened) if any(wanted)]
+        if not (listened or self._aggregates):
+            return
+        every_pose = bool(self._aggregates)
+        self._messages.fill(self.world.snapshot(), range(len(self._outputs)) if every_pose
+                            else listened)
+        for index in listened:
+            outputs = (self._messages.poses[index], self._messages.twists[index],
+                       self._messages.odometry[index])
+            for publisher, wanted, message in zip(self._outputs[index], self._listened[index],
+                                                  outputs):
+                if wanted:
+                    publisher.publish(message)
+        for publisher in self._aggregates:
+            publisher.publish(self._messages.pose_array if publisher is self._pose_array_publisher
+                              else self._messages.markers)
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
-        stats, y = self._stats, self.world.y
+        stats, y, safeguards = self._stats, self.world.y, self.world.diagnostics
         step_mean = stats.step_total / max(stats.ticks, 1)
-        late = step_mean > 1.0 / self.settings.rate
         values = {
             'simulated time [s]': self.world.time, 'paused': self.paused,
             'integrator': self.settings.integrator,
@@ -197,14 +236,27 @@ class RigidSimNode(Node):
             'angular momentum about the world origin [kg m^2/s]': (
                 y[:, ANGULAR_MOMENTUM] + np.cross(y[:, POSITION], y[:, LINEAR_MOMENTUM])
             ).sum(axis=0),
+            'substeps of the last step': safeguards.substeps,
+            'why the last step was split': safeguards.reason,
+            'rejected steps': safeguards.rejected_steps,
+            'failed steps': safeguards.failed_steps,
+            'last step failure': safeguards.last_failure,
             'refused inputs': sum(self.refused.values()),
             **{f'refused inputs {name}': count for name, count in self.refused.items()},
             'last refused input': self._last_refusal}
-        level = DiagnosticStatus.WARN if late else DiagnosticStatus.OK
-        summary = 'steps take longer than a tick' if late else 'running'
+        level, summary = self._health(stats, step_mean)
         self._diagnostics_publisher.publish(conversions.diagnostics(
             f'{self.get_name()}: physics', self.world.time, level, summary, values))
         self._stats = TickStats(self.world.time)
+
+    def _health(self, stats, step_mean):
+        """Diagnostic level and summary of the window that ``stats`` covers."""
+        if stats.failed_ticks:
+            return DiagnosticStatus.ERROR, (f'{stats.failed_ticks} ticks stopped at a step that '
+                                            f'stayed non-finite; state kept')
+        if step_mean > 1.0 / self.settings.rate:
+            return DiagnosticStatus.WARN, 'steps take longer than a tick'
+        return DiagnosticStatus.OK, 'running'
 
     def _on_reset(self, request, response):
         self.world.reset()

@@ -5,10 +5,13 @@ node tick by tick and checks what the probe received against physics worked out 
 Time steps are binary fractions (1/8, 1/64 s) so that simulated times add up exactly.
 """
 import math
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
 from scipy.integrate import quad
 from scipy.spatial.transform import Rotation
 from std_srvs.srv import SetBool, Trigger
@@ -286,3 +289,64 @@ def test_diagnostics_report_energy_and_momentum_of_free_bodies(box):
         np.fromstring(values['angular momentum about the world origin [kg m^2/s]'], sep=' '),
         angular_momentum, atol=1e-8)
     assert values['simulated time [s]'] == '0.5'
+
+
+def test_step_that_stays_non_finite_is_given_up_keeping_the_last_good_state(
+        harness, write_scene):
+    """RK4 on a spring with k/m = 1e30 needs omega h < 2.8, i.e. 4e13 substeps per 1/8 s tick;
+    capped at 1000 (and retried at up to 16000), each substep multiplies the state by about
+    (omega h)^4 / 24 >> 1 and overflows: the node keeps the initial state (finite, at t = 0),
+    keeps publishing it, and /diagnostics reports ERROR."""
+    scene = write_scene(f"""
+effects:
+  springs:
+    - {{body: box, point: [0, 0, 0], anchor: [0.0, 0.0, 1.0], stiffness: 1.0e+30}}
+bodies:
+  - name: box
+    shape: {{type: box, size: {SIZE.tolist()}}}
+    mass: 1.0
+""")
+    sim = harness(scene, time_step=STEP, integrator='rk4')
+    sim.tick(2)
+    position, orientation, velocity, angular_velocity, t = sim.state('box')
+    assert t == 0.0
+    np.testing.assert_array_equal(position, [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(velocity, [0.0, 0.0, 0.0])
+    values = sim.diagnostics()
+    assert values['failed steps'] == '2'
+    assert 'non-finite' in values['last step failure']
+    assert sim.latest('/diagnostics').status[0].level == DiagnosticStatus.ERROR
+
+
+def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
+        ros_context, write_scene):
+    """Outputs nobody listens to are skipped; a subscriber that joins later gets the box's
+    pose within LISTENER_REFRESH of wall time (plus spinning): free flight x0 + v0 t at the
+    simulated time of its stamp."""
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+
+    from rigid_sim.node import LISTENER_REFRESH, RigidSimNode
+    from ros_harness import spin_until
+    sim = RigidSimNode(context=ros_context, parameter_overrides=[
+        Parameter('scene', value=write_scene(SCENE)), Parameter('time_step', value=STEP)])
+    sim.timer.cancel()
+    late = Node('late', context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    for node in (sim, late):
+        executor.add_node(node)
+    sim.tick()   # nobody listens yet
+    received = []
+    late.create_subscription(PoseStamped, f'{sim.get_fully_qualified_name()}/box/pose',
+                             received.append, 10)
+    joined = time.monotonic()
+    spin_until(executor, lambda: sim.tick() or received, what='late subscriber served')
+    assert time.monotonic() - joined < LISTENER_REFRESH + 0.5
+    stamp = conversions.to_seconds(received[0].header.stamp)
+    assert stamp > STEP
+    position, _ = conversions.pose_arrays(received[0].pose)
+    np.testing.assert_allclose(position, X0 + V0 * stamp, atol=1e-12)
+    for node in (sim, late):
+        node.destroy_node()
+    executor.shutdown()
