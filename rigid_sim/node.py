@@ -101,6 +101,17 @@ class RigidSimNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.get_logger().info(self._describe())
+        self._warn_on_frame_mismatch()
+
+    def _warn_on_frame_mismatch(self):
+        # The parameter names the frame of every message; a scene naming another one is
+        # most likely a mistake, so say which one is used rather than pick silently.
+        if self.scene.world_frame != self.settings.world_frame:
+            self.get_logger().warning(
+                f'the scene names its fixed frame {self.scene.world_frame!r} but the '
+                f'world_frame parameter is {self.settings.world_frame!r}: messages use '
+                f'{self.settings.world_frame!r}; set world_frame:={self.scene.world_frame} '
+                f'to follow the scene')
 
     def _describe(self):
         s = self.settings
@@ -307,3 +318,4 @@ class RigidSimNode(Node):
         if proposed.rate != previous.rate:
             self.timer.timer_period_ns = 1e9 / proposed.rate
         self.get_logger().info(self._describe())
+        self._warn_on_frame_mismatch()
