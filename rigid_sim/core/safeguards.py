@@ -111,7 +111,7 @@ class StepGuard:
     """
 
     def __init__(self, bodies, effects):
-        self._inertia_inv = bodies.inertia_body_inv
+        self._inertia_inv_rows = bodies.inertia_body_inv_rows
         self._rate = oscillation_rate(effects)
         self._wrenches = [e for e in effects if isinstance(e, AppliedWrenches)]
         # Bodies torqued whatever happens; applied wrenches torque only while one is held.
@@ -120,6 +120,7 @@ class StepGuard:
             if not isinstance(effect, AppliedWrenches):
                 self._always_torqued |= effect.torqued
         self._may_torque = bool(self._always_torqued.any() or self._wrenches)
+        self._last_spin = (None, None, 0.0)   # (state, covered bodies, their largest |omega|)
 
     def plan(self, integrator, y, dt):
         """Substeps (int) and the reason ('' for one) for a step of ``dt`` from ``y``.
@@ -140,22 +141,40 @@ class StepGuard:
         return substeps, reason
 
     def spin_rate(self, bound, y):
-        """Largest ``|omega|``, rad/s, of the bodies whose rotation ``bound`` covers."""
+        """Largest ``|omega|``, rad/s, of the bodies whose rotation ``bound`` covers.
+
+        The check at the end of a step and the plan of the next one read the same state
+        object (the World replaces ``y``, never writes it in place): the second is a lookup.
+        """
         if bound.rotation == math.inf or not (bound.rotation_all or self._may_torque):
             return 0.0
-        covered = slice(None) if bound.rotation_all else self._torqued_now()
-        if isinstance(covered, np.ndarray) and not covered.any():
-            return 0.0
-        matrices = rotation.to_matrix(y[covered, ORIENTATION])
-        body_l = rotation.rotate_inverse(matrices, y[covered, ANGULAR_MOMENTUM])
-        omega_body = rotation.rotate(self._inertia_inv[covered], body_l)
-        return float(np.sqrt(np.max(np.einsum('ni,ni->n', omega_body, omega_body))))
+        covered = None if bound.rotation_all else self._torqued_now()
+        last_y, last_covered, last_rate = self._last_spin
+        if y is last_y and (covered is None if last_covered is None
+                            else covered is not None and np.array_equal(covered, last_covered)):
+            return last_rate
+        rate = self._largest_omega(y.T, covered)
+        self._last_spin = (y, covered, rate)
+        return rate
+
+    def _largest_omega(self, rows, covered):
+        """Largest ``|omega|`` of the ``covered`` (N,) bool bodies (None: all) of ``rows``."""
+        inertia_inv = self._inertia_inv_rows
+        if covered is not None:
+            if not covered.any():
+                return 0.0
+            if not covered.all():   # a gather only when some bodies are left out
+                rows, inertia_inv = rows[:, covered], inertia_inv[:, :, covered]
+        matrices = rotation.matrix_rows(rows[ORIENTATION])
+        body_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
+        omega_body = rotation.rotate_rows(inertia_inv, body_l)
+        return math.sqrt(np.max(np.einsum('in,in->n', omega_body, omega_body)))
 
     def _torqued_now(self):
         """(N,) bool: bodies some effect may torque during the coming step."""
-        torqued = self._always_torqued.copy()
+        torqued = self._always_torqued
         for wrenches in self._wrenches:
-            torqued[[body for body, _ in wrenches.held]] = True
+            torqued = torqued | wrenches.held_mask
         return torqued
 
 

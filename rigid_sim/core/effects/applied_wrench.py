@@ -36,21 +36,30 @@ class HeldWrench:
 
 
 class AppliedWrenches:
-    """The wrenches currently held on the bodies of a scene."""
+    """The wrenches currently held on the bodies of a scene.
+
+    Holding, replacing or dropping a wrench re-sums only its body, so holding one on each of
+    N bodies costs O(N); the derived arrays are refreshed once, at the next evaluation.
+    """
 
     def __init__(self, bodies, max_force=DEFAULT_MAX_FORCE, max_torque=DEFAULT_MAX_TORQUE,
                  accepts=None):
         self._bodies = bodies
         self.max_force = float(max_force)
         self.max_torque = float(max_torque)
-        self._held = {}
         count = bodies.count
+        # {body: {key: HeldWrench}}, and the world_point ones again under (body, key).
+        self._by_body = {}
+        self._at_points = {}
         # Held sums as rows (2, 3, N): [force, torque], component-major like the integrators.
         self._sums = {'world': np.zeros((2, 3, count)), 'body': np.zeros((2, 3, count))}
+        # (N,) bool: the bodies holding a wrench now (the step guard reads it every step).
+        self.held_mask = np.zeros(count, dtype=bool)
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
         self.velocity_dependent = False
-        self._rebuild()
+        self._next_expiry = np.inf
+        self._stale = True
 
     def check(self, force, torque):
         """Finite (3,) force and torque within the limits, or ValueError saying why."""
@@ -84,44 +93,75 @@ class AppliedWrenches:
         if frame == 'point':
             torque = torque + np.cross(lever, force)
             frame = 'body'
-        self._held[(body, key)] = HeldWrench(body, frame, force, torque, lever, float(expires))
-        self._rebuild()
+        held = HeldWrench(body, frame, force, torque, lever, float(expires))
+        self._by_body.setdefault(body, {})[key] = held
+        self._at_points.pop((body, key), None)
+        if frame == 'world_point':
+            self._at_points[(body, key)] = held
+        # Replacing a wrench may leave this early: expire() then just finds nothing to drop.
+        self._next_expiry = min(self._next_expiry, held.expires)
+        self._resum(body)
 
     def release(self, body=None, key=None):
         """Drop the wrench under (body, key), or all of them when called with no arguments."""
         if body is None:
-            self._held.clear()
+            dropped = list(self._by_body)
+            self._by_body.clear()
+            self._at_points.clear()
         else:
-            self._held.pop((body, key), None)
-        self._rebuild()
+            dropped = [body]
+            self._by_body.get(body, {}).pop(key, None)
+            self._at_points.pop((body, key), None)
+        for index in dropped:
+            self._resum(index)
 
     def expire(self, time):
         """Drop wrenches whose hold has run out by simulated ``time``."""
         if time < self._next_expiry:
             return
-        self._held = {k: w for k, w in self._held.items() if w.expires > time}
-        self._rebuild()
+        ended = [(w.body, key) for wrenches in self._by_body.values()
+                 for key, w in wrenches.items() if w.expires <= time]
+        for body, key in ended:
+            del self._by_body[body][key]
+            self._at_points.pop((body, key), None)
+        for body in {body for body, _ in ended}:
+            self._resum(body)
+        self._next_expiry = min((w.expires for wrenches in self._by_body.values()
+                                 for w in wrenches.values()), default=np.inf)
 
-    def _rebuild(self):
+    def _resum(self, body):
+        """Re-add the wrenches held on ``body`` into the sums, in the order they came."""
+        wrenches = self._by_body.get(body)
         for sums in self._sums.values():
-            sums[:] = 0.0
-        at_points = [w for w in self._held.values() if w.frame == 'world_point']
-        for held in self._held.values():
+            sums[:, :, body] = 0.0
+        for held in (wrenches or {}).values():
             sums = self._sums['body' if held.frame == 'body' else 'world']
-            sums[:, :, held.body] += (held.force, held.torque)
+            sums[:, :, body] += (held.force, held.torque)
+        if not wrenches:
+            self._by_body.pop(body, None)
+        self.held_mask[body] = bool(wrenches)
+        self._stale = True
+
+    def _refresh(self):
+        """Which sums are in use and the world_point arrays, after the holdings changed."""
+        frames = {w.frame for wrenches in self._by_body.values() for w in wrenches.values()}
+        self._any_world = bool(frames - {'body'})
+        self._any_body = 'body' in frames
+        at_points = list(self._at_points.values())
         self._point_body = np.array([w.body for w in at_points], dtype=int)
-        self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3)
-        self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3)
-        self._next_expiry = min((w.expires for w in self._held.values()), default=np.inf)
-        self._any_world = any(w.frame != 'body' for w in self._held.values())
-        self._any_body = any(w.frame == 'body' for w in self._held.values())
+        self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3).T.copy()
+        self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3).T.copy()
+        self._stale = False
 
     @property
     def held(self):
         """Held wrenches, keyed by (body, key)."""
-        return dict(self._held)
+        return {(body, key): w for body, wrenches in self._by_body.items()
+                for key, w in wrenches.items()}
 
     def accumulate(self, snapshot, force, torque):
+        if self._stale:
+            self._refresh()
         # Skipping empty sums changes no number: it only spares the idle case its cost.
         if self._any_body:
             turned = snapshot.to_world(self._sums['body'])
@@ -132,8 +172,10 @@ class AppliedWrenches:
             force += world[0].T
             torque += world[1].T
         if self._point_body.size:
-            lever = rotation.rotate(snapshot.rotation[self._point_body], self._point_lever)
-            np.add.at(torque, self._point_body, np.cross(lever, self._point_force))
+            lever = rotation.rotate_rows(snapshot.rotation_rows[:, :, self._point_body],
+                                         self._point_lever)
+            moment = rotation.cross_rows(lever, self._point_force)
+            np.add.at(torque, self._point_body, moment.T)
 
     def potential_energy(self, snapshot):
         return 0.0

@@ -8,6 +8,7 @@ first; the torque on a body is ``(p - x) x f``. With ``l0 = 0`` the force is the
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 
 from rigid_sim.core.state import POSITION
 
@@ -50,6 +51,13 @@ class Springs:
         self.torqued = np.zeros(bodies.count, dtype=bool)
         self.torqued[self._body] = True
         self.torqued[self._other[to_body]] = True
+        # Incidence (N, E) of the E spring ends on the bodies: one sparse product sums every
+        # end's wrench into its body (np.add.at took ~18x as long at 1000 bodies).
+        ends = np.concatenate((self._body, self._other[to_body]))
+        self._incidence = sparse.csr_array(
+            (np.ones(ends.size), (ends, np.arange(ends.size))), shape=(bodies.count, ends.size))
+        self._end_body = ends
+        self._end_point = np.concatenate((self._point, self._other_point[to_body]))
 
     def _inverse_effective_mass(self, bodies):
         """(S,) 1/kg: an upper bound on how fast each spring's ends accelerate per newton.
@@ -91,19 +99,19 @@ class Springs:
         return float(max(np.sqrt(per_body.max()), self.damping_rate().max()))
 
     def _ends(self, snapshot):
-        """World positions and velocities of both ends, (S, 3) each."""
-        first = snapshot.point_world(self._body, self._point)
-        first_velocity = snapshot.point_velocity(self._body, first)
-        second = snapshot.point_world(self._other, self._other_point)
-        second_velocity = snapshot.point_velocity(self._other, second)
-        mask = self._to_body[:, None]
-        second = np.where(mask, second, self._anchor)
-        second_velocity = np.where(mask, second_velocity, 0.0)
-        return first, first_velocity, second, second_velocity
+        """World positions (E, 3) of the E spring ends on bodies (first ends, then second
+        ends on bodies), and the first and second ends' positions and velocities (S, 3) each.
+        """
+        points = snapshot.point_world(self._end_body, self._end_point)
+        velocities = snapshot.point_velocity(self._end_body, points)
+        count, on_body = self._body.size, self._to_body
+        second, second_velocity = self._anchor.copy(), np.zeros_like(self._anchor)
+        second[on_body], second_velocity[on_body] = points[count:], velocities[count:]
+        return points, (points[:count], velocities[:count], second, second_velocity)
 
     def _tension(self, snapshot):
-        """Force on the first end (S, 3), and the ends, from Hooke's law plus the damper."""
-        first, first_velocity, second, second_velocity = self._ends(snapshot)
+        """Force on the first end (S, 3), and the ends (E, 3), from Hooke's law plus damper."""
+        points, (first, first_velocity, second, second_velocity) = self._ends(snapshot)
         separation = first - second
         relative_velocity = first_velocity - second_velocity
         length = np.linalg.norm(separation, axis=1)
@@ -116,20 +124,19 @@ class Springs:
         zero_rest = -(self._stiffness[:, None] * separation
                       + self._damping[:, None] * relative_velocity)
         force = np.where((self._rest > 0.0)[:, None], along, zero_rest)
-        return force, first, second
+        return force, points
 
     def accumulate(self, snapshot, force, torque):
-        spring_force, first, second = self._tension(snapshot)
-        x = snapshot.y[:, POSITION]
-        np.add.at(force, self._body, spring_force)
-        np.add.at(torque, self._body, np.cross(first - x[self._body], spring_force))
-        on_body = self._to_body
-        other = self._other[on_body]
-        np.add.at(force, other, -spring_force[on_body])
-        np.add.at(torque, other, np.cross(second[on_body] - x[other], -spring_force[on_body]))
+        spring_force, points = self._tension(snapshot)
+        end_force = np.concatenate((spring_force, -spring_force[self._to_body]))
+        lever = points - snapshot.y[self._end_body, POSITION]
+        wrench = self._incidence @ np.concatenate((end_force, np.cross(lever, end_force)),
+                                                  axis=1)
+        force += wrench[:, :3]
+        torque += wrench[:, 3:]
 
     def potential_energy(self, snapshot):
         """``sum k (l - l0)^2 / 2``, J."""
-        first, _, second, _ = self._ends(snapshot)
+        first, _, second, _ = self._ends(snapshot)[1]
         length = np.linalg.norm(first - second, axis=1)
         return float(0.5 * np.sum(self._stiffness * (length - self._rest) ** 2))

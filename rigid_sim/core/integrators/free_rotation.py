@@ -26,10 +26,11 @@ from ``L^2 - 2 E I2`` without cancellation and used for ``K``, ``u0`` and ``dn``
 No NaN is produced for ``mc -> 0`` (on the separatrix ``K = inf`` and no period is reduced).
 """
 import numpy as np
-from scipy.special import ellipj, ellipkm1, elliprf, elliprj
 from scipy.spatial.transform import Rotation
 
 from rigid_sim.core import rotation
+from rigid_sim.core.integrators.elliptic_flow import (elliptic_working, separatrix_gap,
+                                                      shape_constants)
 
 # Moments closer than this (relative) are treated as equal: a few ulps, where the closed form
 # errs by ~1e-14 of the angle turned; the elliptic form stays ~1e-12 accurate down to 1e-14 gaps.
@@ -96,50 +97,112 @@ def torque_free_flow(moments, angular_momentum_body, orientation, dt):
         raise ValueError('orientation must be (N, 4) quaternions (x, y, z, w)')
     if np.any(moments <= 0.0):
         raise ValueError('principal moments must be positive')
-    # Scale-free: flow(m, I, dt) == flow(m/a, I/b, dt a/b) scaled back; avoids over/underflow.
-    m_scale = np.max(np.abs(m), axis=1)
-    i_scale = np.max(moments, axis=1)
-    moving = m_scale > 0.0
-    m_new, q_new = m.copy(), q.copy()
-    if np.any(moving):
-        safe = np.where(moving, m_scale, 1.0)[:, None]
-        time = dt * m_scale / i_scale
-        m_unit = m / safe
-        step = np.zeros_like(q)
-        m_next = np.zeros_like(m)
-        symmetric, axis, i_axis, i_perp = _classify(moments / i_scale[:, None], m_unit)
-        sym = moving & symmetric
-        ell = moving & ~symmetric
-        if np.any(sym):   # an empty branch would still cost its ~50 numpy calls
-            m_next[sym], step[sym] = _axisymmetric(
-                axis[sym], i_axis[sym], i_perp[sym], m_unit[sym], time[sym])
-        if np.any(ell):
-            m_next[ell], step[ell] = _asymmetric(
-                moments[ell] / i_scale[ell, None], m_unit[ell], time[ell])
-        m_new[moving] = m_next[moving] * safe[moving]
-        q_new[moving] = rotation.multiply(q[moving], step[moving])
-    return m_new, rotation.normalize(q_new)
+    return TorqueFreeFlow(moments)(m, q, dt)
 
 
-def _classify(moments, m):
-    """Which bodies take the closed form, and its symmetry axis, I_axis and I_perp.
+class TorqueFreeFlow:
+    """:func:`torque_free_flow` for bodies of fixed moments (N, 3), positive.
 
-    Returns symmetric (N,) bool, axis (N, 3) unit body vector, i_axis (N,), i_perp (N,).
+    What depends on the moments alone (their order, symmetry, the working frames and their
+    quaternions, the elliptic shape constants) is computed once here, not in every step.
     """
-    order = np.argsort(moments, axis=1)
-    s = np.take_along_axis(moments, order, axis=1)
-    m_sorted = np.take_along_axis(m, order, axis=1)
-    equal_12 = s[:, 1] - s[:, 0] <= SYMMETRY_RTOL * s[:, 2]
-    equal_23 = s[:, 2] - s[:, 1] <= SYMMETRY_RTOL * s[:, 2]
-    # m along the intermediate axis: an (unstable) equilibrium, a pure spin.
-    saddle = (m_sorted[:, 0] ** 2 == 0.0) & (m_sorted[:, 2] ** 2 == 0.0)
-    index = np.where(equal_23 & ~equal_12, order[:, 0], order[:, 2])
-    index = np.where(saddle & ~equal_12 & ~equal_23, order[:, 1], index)
-    i_axis = np.take_along_axis(moments, index[:, None], axis=1)[:, 0]
-    i_perp = np.where(equal_23, 0.5 * (s[:, 1] + s[:, 2]), 0.5 * (s[:, 0] + s[:, 1]))
-    i_perp = np.where(saddle & ~equal_12 & ~equal_23, s[:, 0], i_perp)
-    i_axis = np.where(equal_12 & equal_23, i_perp, i_axis)
-    return equal_12 | equal_23 | saddle, AXES[index], i_axis, i_perp
+
+    def __init__(self, moments):
+        # Scale-free: flow(m, I, dt) == flow(m/a, I/b, dt a/b) scaled back; no over/underflow.
+        self._i_scale = np.max(moments, axis=1)
+        self._moments = moments / self._i_scale[:, None]
+        self._order = np.argsort(self._moments, axis=1)
+        s = np.take_along_axis(self._moments, self._order, axis=1)
+        self._sorted = s
+        self._equal_12 = s[:, 1] - s[:, 0] <= SYMMETRY_RTOL * s[:, 2]
+        self._equal_23 = s[:, 2] - s[:, 1] <= SYMMETRY_RTOL * s[:, 2]
+        self._symmetric = self._equal_12 | self._equal_23
+        self._working_frames(s)
+
+    def _working_frames(self, s):
+        """Tables over the four working frames of each body: major or minor axis 3, m1
+        flipped or not (index ``2 minor + flip``): frames, moments, quaternions, constants."""
+        major = AXES[self._order]
+        major[np.linalg.det(major) < 0.0, 0] *= -1.0
+        minor = SWAP_MAJOR_MINOR @ major
+        self._frames = np.stack((major, HALF_TURN_Z @ major, minor, HALF_TURN_Z @ minor))
+        self._quaternions = _FRAME_QUATERNIONS[_frame_keys(self._frames)].reshape(4, -1, 4)
+        self._working_moments = np.stack((s, s[:, ::-1]))
+        # Symmetric bodies divide 0 by 0 here; they take the closed form and never read it.
+        with np.errstate(invalid='ignore', divide='ignore'):
+            self._shape = np.array([shape_constants(i) for i in self._working_moments])
+
+    def __call__(self, m, q, dt):
+        """New body-axes ``m`` (N, 3) and unit ``q`` (N, 4) after ``dt`` from ``m``, ``q``."""
+        m_scale = np.max(np.abs(m), axis=1)
+        time = dt * m_scale / self._i_scale
+        moving = m_scale > 0.0
+        if moving.all():
+            symmetric = self._symmetric | self._saddle(m)
+            if not symmetric.any():   # every body elliptic: no masks, no gathers
+                m_next, step = self._asymmetric(slice(None), m / m_scale[:, None], time)
+                return m_next * m_scale[:, None], rotation.normalize(rotation.multiply(q, step))
+        return self._masked(m, q, m_scale, time, moving)
+
+    def _masked(self, m, q, m_scale, time, moving):
+        """The flow when some bodies are still, symmetric or spinning about axis 2."""
+        m_new, q_new = m.copy(), q.copy()
+        if np.any(moving):
+            safe = np.where(moving, m_scale, 1.0)[:, None]
+            m_unit = m / safe
+            step = np.zeros_like(q)
+            m_next = np.zeros_like(m)
+            symmetric, axis, i_axis, i_perp = self._classify(m_unit)
+            sym = moving & symmetric
+            ell = moving & ~symmetric
+            if np.any(sym):   # an empty branch would still cost its ~50 numpy calls
+                m_next[sym], step[sym] = _axisymmetric(
+                    axis[sym], i_axis[sym], i_perp[sym], m_unit[sym], time[sym])
+            if np.any(ell):
+                m_next[ell], step[ell] = self._asymmetric(ell, m_unit[ell], time[ell])
+            m_new[moving] = m_next[moving] * safe[moving]
+            q_new[moving] = rotation.multiply(q[moving], step[moving])
+        return m_new, rotation.normalize(q_new)
+
+    def _saddle(self, m):
+        """(N,) bool: m along the intermediate axis, an (unstable) equilibrium, a pure spin."""
+        m_sorted = np.take_along_axis(m, self._order, axis=1)
+        return (m_sorted[:, 0] ** 2 == 0.0) & (m_sorted[:, 2] ** 2 == 0.0)
+
+    def _classify(self, m):
+        """Which bodies take the closed form, and its symmetry axis, I_axis and I_perp.
+
+        Returns symmetric (N,) bool, axis (N, 3) unit body vector, i_axis (N,), i_perp (N,).
+        """
+        order, s, equal_12, equal_23 = self._order, self._sorted, self._equal_12, self._equal_23
+        saddle = self._saddle(m)
+        index = np.where(equal_23 & ~equal_12, order[:, 0], order[:, 2])
+        index = np.where(saddle & ~equal_12 & ~equal_23, order[:, 1], index)
+        i_axis = np.take_along_axis(self._moments, index[:, None], axis=1)[:, 0]
+        i_perp = np.where(equal_23, 0.5 * (s[:, 1] + s[:, 2]), 0.5 * (s[:, 0] + s[:, 1]))
+        i_perp = np.where(saddle & ~equal_12 & ~equal_23, s[:, 0], i_perp)
+        i_axis = np.where(equal_12 & equal_23, i_perp, i_axis)
+        return self._symmetric | saddle, AXES[index], i_axis, i_perp
+
+    def _asymmetric(self, bodies, m, time):
+        """Elliptic free motion of the asymmetric ``bodies`` (a slice or mask): new m (K, 3)
+        and body-frame rotation step (K, 4), from m (K, 3) in working units and time (K,)."""
+        frames = self._frames[:, bodies]
+        each = np.arange(len(m))
+        # L^2 - 2 E I2 < 0: m circles the minor axis.
+        m_major = np.einsum('nij,nj->ni', frames[0], m)
+        minor = (separatrix_gap(self._working_moments[0, bodies], m_major) < 0.0).astype(int)
+        m_w = np.einsum('nij,nj->ni', frames[2 * minor, each], m)
+        variant = 2 * minor + (m_w[:, 0] < 0.0)
+        frame = frames[variant, each]
+        m_w = np.einsum('nij,nj->ni', frame, m)
+        ratio, nu = self._shape[:, :, bodies][minor, :, each].T
+        m_w_new, core = elliptic_working(self._working_moments[:, bodies][minor, each], m_w,
+                                         time, ratio, nu)
+        m_new = np.einsum('nji,nj->ni', frame, m_w_new)
+        p = self._quaternions[:, bodies][variant, each]
+        step = rotation.multiply(rotation.multiply(rotation.conjugate(p), core), p)
+        return m_new, step
 
 
 def _axisymmetric(axis, i_axis, i_perp, m, time):
@@ -156,103 +219,3 @@ def _axisymmetric(axis, i_axis, i_perp, m, time):
     step = rotation.multiply(rotation.exp_map(m * (time / i_perp)[:, None]),
                              rotation.exp_map(axis * (spin * time)[:, None]))
     return m_new, step
-
-
-def _working_frame(moments, m):
-    """Signed permutation P (proper) to the working frame; moments and m there."""
-    order = np.argsort(moments, axis=1)
-    frame = AXES[order]
-    frame[np.linalg.det(frame) < 0.0, 0] *= -1.0
-    i_w = np.take_along_axis(moments, order, axis=1)
-    m_w = np.einsum('nij,nj->ni', frame, m)
-    # L^2 - 2 E I2 < 0: m circles the minor axis.
-    minor = _separatrix_gap(i_w, m_w) < 0.0
-    frame[minor] = SWAP_MAJOR_MINOR @ frame[minor]
-    i_w[minor] = i_w[minor, ::-1]
-    m_w = np.einsum('nij,nj->ni', frame, m)
-    flip = m_w[:, 0] < 0.0
-    frame[flip] = HALF_TURN_Z @ frame[flip]
-    m_w[flip, :2] *= -1.0
-    return frame, i_w, m_w
-
-
-def _separatrix_gap(i, m):
-    """``L^2 - 2 E I2``, summed without cancelling the I2 term."""
-    return (m[:, 0] ** 2 * (i[:, 0] - i[:, 1]) / i[:, 0]
-            + m[:, 2] ** 2 * (i[:, 2] - i[:, 1]) / i[:, 2])
-
-
-def _asymmetric(moments, m, time):
-    """Elliptic free motion of asymmetric bodies: new m and body-frame rotation step."""
-    frame, i_w, m_w = _working_frame(moments, m)
-    m_w_new, core = _elliptic_working(i_w, m_w, time)
-    m_new = np.einsum('nji,nj->ni', frame, m_w_new)
-    p = _FRAME_QUATERNIONS[_frame_keys(frame)]
-    step = rotation.multiply(rotation.multiply(rotation.conjugate(p), core), p)
-    return m_new, step
-
-
-def _invariants(i, m):
-    """Squared amplitudes and parameters of m(t) in the working frame (see module doc)."""
-    i1, i2, i3 = i.T
-    m1, m2, m3 = (m ** 2).T
-    above = m1 * (i3 - i1) / i1 + m2 * (i3 - i2) / i2   # 2 E I3 - L^2, no cancellation
-    below = m2 * (i2 - i1) / i2 + m3 * (i3 - i1) / i3   # L^2 - 2 E I1, no cancellation
-    k2 = np.clip(above * (i2 - i1) / (below * (i3 - i2)), 0.0, 1.0)
-    mc = np.clip((i3 - i1) * _separatrix_gap(i, m) / (below * (i3 - i2)), 0.0, 1.0)
-    amplitude = np.sqrt(np.stack((above * i1 / (i3 - i1), above * i2 / (i3 - i2),
-                                  below * i3 / (i3 - i1)), axis=1))
-    rate = np.sign(m[:, 2]) * np.sign(i3 - i1) * np.sqrt(below * (i3 - i2) / (i1 * i2 * i3))
-    rate = np.where(m[:, 2] == 0.0, np.abs(rate), rate)
-    return k2, mc, amplitude, rate
-
-
-def _pi_minus(nu, s, c, dn2):
-    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi."""
-    return s * elliprf(c * c, dn2, 1.0) - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0,
-                                                                      1.0 + nu * s * s)
-
-
-def _elliptic_working(i, m, time):
-    """Advance m and build ``B0^T Rz(dpsi) B1`` (quaternion) in the working frame."""
-    i1, i2, i3 = i.T
-    k2, mc, amp, rate = _invariants(i, m)
-    ratio = np.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1)))   # a1 / a2, finite for a pure spin
-    nu = i3 * (i2 - i1) / (i1 * (i3 - i2))
-    h = np.hypot(ratio * m[:, 1], m[:, 0])
-    s0 = np.where(h > 0.0, ratio * m[:, 1] / np.where(h > 0.0, h, 1.0), 0.0)
-    c0 = np.where(h > 0.0, m[:, 0] / np.where(h > 0.0, h, 1.0), 1.0)
-    u0 = s0 * elliprf(c0 * c0, c0 * c0 + mc * s0 * s0, 1.0)   # F(am0), |am0| <= pi/2
-    u1 = u0 + rate * time
-    quarter = ellipkm1(mc)   # K, from mc directly (inf on the separatrix)
-    with np.errstate(invalid='ignore', divide='ignore'):
-        turns = np.where(np.isfinite(quarter), np.round(u1 / (2.0 * quarter)), 0.0)
-        shift = np.where(turns != 0.0, 2.0 * turns * quarter, 0.0)
-        sn, cn, dn, _ = ellipj(u1 - shift, k2)
-        dn2 = cn * cn + mc * sn * sn
-        complete = elliprf(0.0, mc, 1.0) - nu / 3.0 * elliprj(0.0, mc, 1.0, 1.0 + nu)
-        g1 = np.where(turns != 0.0, 2.0 * turns * complete, 0.0) + _pi_minus(nu, sn, cn, dn2)
-    g0 = _pi_minus(nu, s0, c0, c0 * c0 + mc * s0 * s0)
-    sign = 1.0 - 2.0 * np.mod(turns, 2.0)
-    m_new = np.stack((amp[:, 0] * sign * cn, amp[:, 1] * sign * sn,
-                      np.where(m[:, 2] < 0.0, -1.0, 1.0) * amp[:, 2] * np.sqrt(dn2)), axis=1)
-    big_l = np.linalg.norm(m, axis=1)
-    dpsi = big_l * time / i3 + big_l * (i3 - i1) / (i1 * i3 * rate) * (g1 - g0)
-    alpha0 = np.arctan2(s0, ratio * c0)
-    alpha1 = turns * np.pi + np.arctan2(sn, ratio * cn)
-    core = rotation.multiply(_zyz(alpha0, _polar(m), dpsi),
-                             rotation.conjugate(_zyz(alpha1, _polar(m_new), 0.0)))
-    return m_new, core
-
-
-def _polar(m):
-    """Angle between m and the working axis 3, in [0, pi]."""
-    return np.arctan2(np.hypot(m[:, 0], m[:, 1]), m[:, 2])
-
-
-def _zyz(a, b, c):
-    """Quaternions ``(x, y, z, w)`` of ``Rz(a) Ry(b) Rz(c)``, (N,) angles each."""
-    half_b = 0.5 * b
-    diff, total = 0.5 * (c - a), 0.5 * (a + c)
-    return np.stack((np.sin(half_b) * np.sin(diff), np.sin(half_b) * np.cos(diff),
-                     np.cos(half_b) * np.sin(total), np.cos(half_b) * np.cos(total)), axis=1)

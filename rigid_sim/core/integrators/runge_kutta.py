@@ -43,27 +43,29 @@ class ExplicitRungeKutta(Integrator):
         super().__init__(system, tolerance)
         self._formulation = self.formulation(self)
         self._slopes = np.empty((len(self.tableau.b), 13, self.bodies.count))
-        self._weights = np.zeros((len(self.tableau.b), len(self.tableau.b)))
+        weights = np.zeros((len(self.tableau.b), len(self.tableau.b)))
         for stage, row in enumerate(self.tableau.a):
-            self._weights[stage, :len(row)] = row
+            weights[stage, :len(row)] = row
+        # Per stage: the earlier slopes it uses and their weights, found once, not per step.
+        used = [np.flatnonzero(weights[stage, :stage]) for stage in range(len(weights))]
+        self._stages = [(fraction, used[stage], weights[stage, used[stage]])
+                        for stage, fraction in enumerate(self.tableau.c)]
+        self._b = np.asarray(self.tableau.b)
 
     def _step_impl(self, rows, time, dt):
         f, slopes = self._formulation, self._slopes
         z = f.to_internal(rows)
-        for stage, fraction in enumerate(self.tableau.c):
-            used = np.flatnonzero(self._weights[stage, :stage])
+        for stage, (fraction, used, weights) in enumerate(self._stages):
             if used.size == 1:   # one earlier slope (every classical stage): no reduction
-                np.multiply(slopes[used[0]], dt * self._weights[stage, used[0]], out=f.state)
+                np.multiply(slopes[used[0]], dt * weights[0], out=f.state)
                 f.state += z
             elif used.size:
-                np.einsum('s,sin->in', dt * self._weights[stage, used], slopes[used],
-                          out=f.state)
+                np.einsum('s,sin->in', dt * weights, slopes[used], out=f.state)
                 f.state += z
             else:
                 f.state[...] = z
             f.slope(time + fraction * dt, out=slopes[stage])
-        combined = np.einsum('s,sin->in', dt * np.asarray(self.tableau.b), slopes,
-                             out=f.state)
+        combined = np.einsum('s,sin->in', dt * self._b, slopes, out=f.state)
         combined += z
         return f.to_public(combined)
 

@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_sim.core import rotation
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.free_rotation import torque_free_flow
+from rigid_sim.core.integrators.free_rotation import TorqueFreeFlow
 from rigid_sim.core.integrators.runge_kutta import CLASSICAL_RK4, EXPLICIT_MIDPOINT
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
 
@@ -89,6 +89,10 @@ class StrangSplitting(Integrator):
         self._moment_rows = np.ascontiguousarray(moments.T)
         self._principal = Rotation.from_matrix(body_from_principal).as_quat().T.copy()
         self._principal_inverse = self._principal * np.array([[-1.0], [-1.0], [-1.0], [1.0]])
+        # Bodies whose frames are already principal (diagonal inertia, sorted) skip two
+        # quaternion products per drift; multiplying by the identity would change no bit.
+        self._principal_is_body = bool(np.all(self._principal == np.array([[0.0], [0.0], [0.0],
+                                                                           [1.0]])))
 
     def _step_impl(self, rows, time, dt):
         # Adjacent half kicks of consecutive sub-steps act at the same state and time, so
@@ -122,13 +126,17 @@ class StrangSplitting(Integrator):
     def _drift(self, rows, h):
         """Free motion for ``h``: straight-line translation and torque-free rotation."""
         rows[POSITION] += rows[LINEAR_MOMENTUM] * (h * self.bodies.inverse_mass)
-        principal_q = rotation.multiply_rows(rows[ORIENTATION], self._principal)
+        principal_q = rows[ORIENTATION]
+        if not self._principal_is_body:
+            principal_q = rotation.multiply_rows(principal_q, self._principal)
         matrices = rotation.matrix_rows(principal_q)
         principal_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
         principal_l, principal_q = self._free_rotation_rows(principal_l, principal_q, h)
         rotation.rotate_rows(rotation.matrix_rows(principal_q), principal_l,
                              out=rows[ANGULAR_MOMENTUM])
-        rows[ORIENTATION] = rotation.multiply_rows(principal_q, self._principal_inverse)
+        if not self._principal_is_body:
+            principal_q = rotation.multiply_rows(principal_q, self._principal_inverse)
+        rows[ORIENTATION] = principal_q
 
     def _free_rotation_rows(self, principal_l, principal_q, h):
         """Torque-free rotation of rows (3, N) and (4, N) for ``h``."""
@@ -170,9 +178,12 @@ class ExactSplit(StrangSplitting):
 
     name = 'exact_split'
 
+    def __init__(self, system, tolerance=1e-6):
+        super().__init__(system, tolerance)
+        self._flow = TorqueFreeFlow(self._moments)
+
     def _free_rotation_rows(self, principal_l, principal_q, h):
-        principal_l, principal_q = torque_free_flow(self._moments, principal_l.T,
-                                                    principal_q.T, h)
+        principal_l, principal_q = self._flow(principal_l.T, principal_q.T, h)
         return principal_l.T, principal_q.T
 
 

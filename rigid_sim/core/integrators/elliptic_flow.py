@@ -1,0 +1,89 @@
+"""The elliptic branch of the exact free flow, in a body's working frame.
+
+See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the working frame
+(``I1 < I2 < I3`` or reversed, ``m1 >= 0``); quaternions are scalar-last ``(x, y, z, w)``.
+"""
+import numpy as np
+from scipy.special import ellipj, ellipkm1, elliprf, elliprj
+
+from rigid_sim.core import rotation
+
+
+def separatrix_gap(i, m):
+    """``L^2 - 2 E I2``, summed without cancelling the I2 term."""
+    return (m[:, 0] ** 2 * (i[:, 0] - i[:, 1]) / i[:, 0]
+            + m[:, 2] ** 2 * (i[:, 2] - i[:, 1]) / i[:, 2])
+
+
+def _invariants(i, m):
+    """Squared amplitudes and parameters of m(t) in the working frame (see module doc)."""
+    i1, i2, i3 = i.T
+    m1, m2, m3 = (m ** 2).T
+    above = m1 * (i3 - i1) / i1 + m2 * (i3 - i2) / i2   # 2 E I3 - L^2, no cancellation
+    below = m2 * (i2 - i1) / i2 + m3 * (i3 - i1) / i3   # L^2 - 2 E I1, no cancellation
+    k2 = np.clip(above * (i2 - i1) / (below * (i3 - i2)), 0.0, 1.0)
+    mc = np.clip((i3 - i1) * separatrix_gap(i, m) / (below * (i3 - i2)), 0.0, 1.0)
+    amplitude = np.sqrt(np.stack((above * i1 / (i3 - i1), above * i2 / (i3 - i2),
+                                  below * i3 / (i3 - i1)), axis=1))
+    rate = np.sign(m[:, 2]) * np.sign(i3 - i1) * np.sqrt(below * (i3 - i2) / (i1 * i2 * i3))
+    rate = np.where(m[:, 2] == 0.0, np.abs(rate), rate)
+    return k2, mc, amplitude, rate
+
+
+def _pi_minus(nu, s, c, dn2):
+    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi."""
+    return s * elliprf(c * c, dn2, 1.0) - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0,
+                                                                      1.0 + nu * s * s)
+
+
+def shape_constants(i):
+    """``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments (N, 3)."""
+    i1, i2, i3 = i.T
+    return np.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1))), i3 * (i2 - i1) / (i1 * (i3 - i2))
+
+
+def elliptic_working(i, m, time, ratio, nu):
+    """Advance m and build ``B0^T Rz(dpsi) B1`` (quaternion) in the working frame.
+
+    ``i`` (N, 3) working-frame moments, ``m`` (N, 3), ``time`` (N,), and ``ratio``, ``nu``
+    (N,) from :func:`shape_constants` of ``i``. Returns m (N, 3) and the quaternion (N, 4).
+    """
+    i1, i2, i3 = i.T
+    k2, mc, amp, rate = _invariants(i, m)
+    h = np.hypot(ratio * m[:, 1], m[:, 0])
+    s0 = np.where(h > 0.0, ratio * m[:, 1] / np.where(h > 0.0, h, 1.0), 0.0)
+    c0 = np.where(h > 0.0, m[:, 0] / np.where(h > 0.0, h, 1.0), 1.0)
+    u0 = s0 * elliprf(c0 * c0, c0 * c0 + mc * s0 * s0, 1.0)   # F(am0), |am0| <= pi/2
+    u1 = u0 + rate * time
+    quarter = ellipkm1(mc)   # K, from mc directly (inf on the separatrix)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        turns = np.where(np.isfinite(quarter), np.round(u1 / (2.0 * quarter)), 0.0)
+        shift = np.where(turns != 0.0, 2.0 * turns * quarter, 0.0)
+        sn, cn, dn, _ = ellipj(u1 - shift, k2)
+        dn2 = cn * cn + mc * sn * sn
+        complete = elliprf(0.0, mc, 1.0) - nu / 3.0 * elliprj(0.0, mc, 1.0, 1.0 + nu)
+        g1 = np.where(turns != 0.0, 2.0 * turns * complete, 0.0) + _pi_minus(nu, sn, cn, dn2)
+    g0 = _pi_minus(nu, s0, c0, c0 * c0 + mc * s0 * s0)
+    sign = 1.0 - 2.0 * np.mod(turns, 2.0)
+    m_new = np.stack((amp[:, 0] * sign * cn, amp[:, 1] * sign * sn,
+                      np.where(m[:, 2] < 0.0, -1.0, 1.0) * amp[:, 2] * np.sqrt(dn2)), axis=1)
+    big_l = np.linalg.norm(m, axis=1)
+    dpsi = big_l * time / i3 + big_l * (i3 - i1) / (i1 * i3 * rate) * (g1 - g0)
+    alpha0 = np.arctan2(s0, ratio * c0)
+    alpha1 = turns * np.pi + np.arctan2(sn, ratio * cn)
+    core = rotation.multiply(_zyz(alpha0, _polar(m), dpsi),
+                             rotation.conjugate(_zyz(alpha1, _polar(m_new), 0.0)))
+    return m_new, core
+
+
+def _polar(m):
+    """Angle between m and the working axis 3, in [0, pi]."""
+    return np.arctan2(np.hypot(m[:, 0], m[:, 1]), m[:, 2])
+
+
+def _zyz(a, b, c):
+    """Quaternions ``(x, y, z, w)`` of ``Rz(a) Ry(b) Rz(c)``, (N,) angles each."""
+    half_b = 0.5 * b
+    diff, total = 0.5 * (c - a), 0.5 * (a + c)
+    return np.stack((np.sin(half_b) * np.sin(diff), np.sin(half_b) * np.cos(diff),
+                     np.cos(half_b) * np.sin(total), np.cos(half_b) * np.cos(total)), axis=1)
