@@ -1,0 +1,60 @@
+"""``rigid_sim_bench node`` runs end to end on its quick configuration (N = 1 and 10).
+
+conftest.py gives this run its own ROS_DOMAIN_ID, LOCALHOST discovery and a log directory;
+the benchmark keeps the same settings for its node and its listener process.
+"""
+import math
+
+import numpy as np
+import yaml
+
+from rigid_sim.bench import cli
+from rigid_sim.bench.node_rate import QUICK, SECTION, scene_text
+from rigid_sim.core.scene import parse_scene
+
+
+def table_rows(text):
+    """Cells of the rows of the Markdown table under 'Real-time factor and tick time'."""
+    block = text.split('Real-time factor and tick time', 1)[1].split('###', 1)[0]
+    rows = [[cell.strip() for cell in line.split('|')[1:-1]] for line in block.splitlines()
+            if line.startswith('| ') and '---' not in line]
+    return rows[1:]
+
+
+def test_scene_has_n_spinning_boxes_and_no_wrench_inputs_at_scale(tmp_path):
+    """The generated scene holds N distinct bodies, each spinning (a non-zero angular velocity,
+    so attitude integration is exercised), all under the same gravity; from N = 100 on no body
+    takes wrench inputs, so the node makes no wrench subscriptions."""
+    for n, wrench_input in ((10, True), (100, False)):
+        scene = parse_scene(yaml.safe_load(scene_text(n)), base_dir=str(tmp_path))
+        assert len({body.name for body in scene.bodies}) == n
+        assert all(np.linalg.norm(body.angular_velocity) > 0.0 for body in scene.bodies)
+        assert {body.wrench_input for body in scene.bodies} == {wrench_input}
+        np.testing.assert_array_equal(scene.effects['gravity']['acceleration'], [0, 0, -9.81])
+
+
+def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
+    """Each quick configuration gets a row: the node advanced simulated time (a positive,
+    finite real-time factor, near the target 1 since N <= 10 is light work, within what a
+    busy test machine allows), ticked about rate x duration times, and the listener process
+    heard every topic the configuration claims, at a rate near publish_rate x topics. The
+    section is written with the hand-written text around it kept."""
+    out = tmp_path / 'performance.md'
+    out.write_text('# Hand-written title\n')
+    args = cli.build_parser().parse_args(['node', '--quick', '--out', str(out)])
+    results = args.run(args)
+    rows = table_rows(capsys.readouterr().out)
+    assert [int(row[0]) for row in rows] == [config.bodies for config in QUICK['configs']]
+    assert len(results) == len(QUICK['configs'])
+    for result in results:
+        config = result['config']
+        assert 0.5 < result['real_time_factor'] < 1.1 and math.isfinite(result['tick_mean'])
+        assert 0.5 * result['expected_ticks'] < result['ticks'] <= result['expected_ticks'] + 2
+        assert 0.0 < result['tick_mean'] <= result['tick_p99']
+        assert result['topics'] == (2 * config.bodies if config.listened == 'bodies' else 1)
+        assert result['topics_heard'] == result['topics']
+        assert result['received_rate'] > 0.3 * result['expected_rate']
+    written = out.read_text()
+    assert written.startswith('# Hand-written title')
+    assert f'<!-- {SECTION}: begin -->' in written
+    assert table_rows(written) == rows
