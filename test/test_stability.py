@@ -280,3 +280,24 @@ def test_damped_angular_momentum_decays_exactly():
     h = case.dt / world.diagnostics.substeps
     allowed = hard.DAMPING_RATE ** 3 * h ** 2 * world.time / 6.0
     np.testing.assert_allclose(world.y[0, ANGULAR_MOMENTUM], expected, rtol=allowed)
+
+
+def _substep_counts(steps=3000):
+    """Substeps of each step of the one-body long run (dt 0.01 s, default integrator)."""
+    world = hard.long_run_case().build(DEFAULT_INTEGRATOR, True)
+    counts = []
+    for _ in range(steps):
+        world.step(0.01)
+        counts.append(world.diagnostics.substeps)
+    return np.array(counts)
+
+
+def test_substep_count_holds_while_the_need_hovers_at_a_bound(monkeypatch):
+    """A spinning body on a spring needs ~0.7 of the Strang bound for the spring and 0.2-0.4
+    for its spin, so its need crosses 1 again and again. Each change of step size moves the
+    energy a symplectic method keeps, so the count is raised once and then held; without the
+    margin it would follow every crossing."""
+    counts = _substep_counts()
+    assert np.count_nonzero(np.diff(counts)) <= 1 and counts[-1] == 2
+    monkeypatch.setattr(safeguards, 'KEEP_MARGIN', 1.0)
+    assert np.count_nonzero(np.diff(_substep_counts())) > 2

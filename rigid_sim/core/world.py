@@ -70,11 +70,11 @@ class World:
         dt = safeguards.check_time_step(dt)
         for effect in self._expiring:
             effect.expire(self.time)
-        substeps, reason = self._plan(self.y, dt)
+        substeps, reason = self._plan(self.y, dt, self.diagnostics.substeps)
         y = self._attempt(dt, substeps)
         if y is not None and self.auto_substep:
             # A wrench may spin a body up within the step: redo it if the end breaks the bound.
-            grown, why = self._plan(y, dt)
+            grown, why = self._plan(y, dt, substeps)
             if grown > substeps:
                 substeps, reason = grown, why + ' (reached during the step)'
                 y = self._attempt(dt, substeps)
@@ -87,10 +87,10 @@ class World:
         self.time += dt
         return True
 
-    def _plan(self, y, dt):
+    def _plan(self, y, dt, current):
         if not self.auto_substep:
             return 1, ''
-        return self._guard.plan(self.integrator, y, dt)
+        return self._guard.plan(self.integrator, y, dt, current)
 
     def _attempt(self, dt, substeps):
         """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
