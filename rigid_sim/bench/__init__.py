@@ -54,10 +54,13 @@ def scientific(value, digits=2):
 
 
 def markdown_table(header, rows):
-    """A GitHub Markdown table from a header (K,) and rows of K strings."""
-    lines = ['| ' + ' | '.join(header) + ' |', '|' + ' --- |' * len(header)]
-    lines += ['| ' + ' | '.join(str(cell) for cell in row) + ' |' for row in rows]
-    return '\n'.join(lines)
+    """A GitHub Markdown table from a header (K,) and rows of K strings.
+
+    A ``|`` inside a cell (``|omega|``, ``|L|``) is escaped, or it would split the column.
+    """
+    def line(cells):
+        return '| ' + ' | '.join(str(cell).replace('|', r'\|') for cell in cells) + ' |'
+    return '\n'.join([line(header), '|' + ' --- |' * len(header)] + [line(row) for row in rows])
 
 
 def machine_description(extra_versions=()):
