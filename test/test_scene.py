@@ -61,6 +61,18 @@ def test_valid_scene_parses():
     assert scene.effects['springs'][1].other == 1
 
 
+def test_given_inertia_in_either_spelling_is_the_tensor_given():
+    """``given: {matrix: ..}`` (INTERFACE.md) and ``diagonal: ..`` both give the body exactly
+    the principal moments written, about its centre of mass."""
+    tensor = [[0.003, 0.001, 0.0], [0.001, 0.003, 0.0], [0.0, 0.0, 0.004]]   # moments 2, 4, 4
+    nested = parse_scene(scene_with(put('bodies', 1, 'inertia', {'given': {'matrix': tensor}})))
+    diagonal = {'diagonal': [0.002, 0.004, 0.004]}
+    flat = parse_scene(scene_with(put('bodies', 1, 'inertia', diagonal)))
+    for scene in (nested, flat):
+        moments = np.linalg.eigvalsh(scene.bodies[1].mass_properties.inertia)
+        assert moments == pytest.approx([0.002, 0.004, 0.004], rel=1e-12)
+
+
 @pytest.mark.parametrize('path', SHIPPED, ids=os.path.basename)
 def test_shipped_scene_loads_builds_and_steps(path):
     """Each shipped scene builds a world whose energy stays finite over a few steps."""
@@ -242,6 +254,7 @@ MISTAKES = [  # (change, key path named, reason)
     (put(*SPRING0, 'damping', -0.1), 'effects.springs[0].damping', 'must be non-negative'),
     (put(*SPRING0, 'rest_length', -0.1), 'effects.springs[0].rest_length', 'non-negative'),
     (put('effects', 'damping', 'linear', -0.1), 'effects.damping.linear', 'non-negative'),
+    (put('world_frame', 'ball'), 'bodies[1].name', "body name 'ball' is the world_frame"),
     (put(*B0, 'points', 'ball', [0, 0, 0]), 'bodies[0].points.ball', 'already a frame name'),
     (put(*B0, 'points', 'world', [0, 0, 0]), 'bodies[0].points.world', 'already a frame'),
     (put(*B0, 'pose', 'orientation', [0, 0, 0, 0]), 'bodies[0].pose.orientation',
@@ -266,6 +279,13 @@ MISTAKES = [  # (change, key path named, reason)
     (put(*B0, 'inertia', {'matrix': [[1, 0, 0], [0, 1, 0]]}), 'bodies[0].inertia.matrix',
      '3 rows of 3 numbers'),
     (put(*B0, 'inertia', {'method': 'given'}), 'bodies[0].inertia', 'exactly one of diagonal'),
+    (put(*B0, 'inertia', {'given': {'diagonal': [0.01, 0.01, 0.05]}}),
+     'bodies[0].inertia.given.diagonal', 'triangle inequality'),
+    (put(*B0, 'inertia', {'given': {}}), 'bodies[0].inertia', 'exactly one of diagonal'),
+    (put(*B0, 'inertia', {'method': 'exact', 'given': {'diagonal': [1, 1, 1]}}),
+     'bodies[0].inertia.given', 'no method, diagonal or matrix beside it'),
+    (put(*B0, 'inertia', {'diagonal': [1, 1, 1], 'given': {'diagonal': [1, 1, 1]}}),
+     'bodies[0].inertia.given', 'no method, diagonal or matrix beside it'),
     (put(*B0, 'inertia', {'method': 'sampling', 'samples': 0}), 'bodies[0].inertia.samples',
      'must be positive'),
     (put(*B0, 'inertia', {'method': 'sampling', 'samples': 10.5}), 'bodies[0].inertia.samples',

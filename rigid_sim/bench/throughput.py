@@ -49,8 +49,8 @@ MUJOCO_BODY = ('<body pos="{x} 0 0"><freejoint/><inertial pos="0 0 0" mass="1" '
 def bodies_and_state(n):
     """N identical-mass bodies with distinct orientations and spins: RigidBodies, y (N, 13).
 
-    Cached, as is each effect set built for them: holding N wrenches one by one costs O(N^2),
-    and no run changes either (a World copies ``y``; effects keep no state while stepping).
+    Cached, as is each effect set built for them: no run changes either (a World copies
+    ``y``; effects keep no state while stepping).
     """
     bodies = RigidBodies(names=tuple(f'body{i}' for i in range(n)), mass=np.ones(n),
                          inertia_body=np.repeat(np.diag(MOMENTS)[None], n, axis=0),

@@ -74,9 +74,10 @@ SHAPES = {
     'cylinder': {'radius': (positive, REQUIRED), 'length': (positive, REQUIRED)},
     'mesh': {'file': (of_type(str, 'a file name'), REQUIRED), 'scale': (scale, 1.0)},
 }
+GIVEN = {'diagonal': (vector, ABSENT), 'matrix': (matrix, ABSENT)}
 INERTIA = {'method': (choice(*INERTIA_METHODS), ABSENT),
            'samples': (of_type(int, 'a whole number of samples'), ABSENT),
-           'diagonal': (vector, ABSENT), 'matrix': (matrix, ABSENT)}
+           'given': (table(GIVEN), ABSENT), **GIVEN}
 ZERO = [0.0, 0.0, 0.0]
 # Shape and inertia arrive raw: their valid keys depend on their type, checked in _body.
 BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
@@ -118,8 +119,20 @@ def _shape(value, key, base_dir):
 
 
 def _inertia(value, key):
-    """Validated inertia method; a diagonal or matrix without a method means 'given'."""
+    """Validated inertia method; a diagonal or matrix without a method means 'given'.
+
+    ``given: {diagonal: [..]}`` (or ``matrix``), as INTERFACE.md writes it, is the same as
+    ``{method: given, diagonal: [..]}``.
+    """
     inertia = fields(value, key, INERTIA)
+    tensor_key = key
+    if 'given' in inertia:
+        nested = inertia.pop('given')
+        if set(nested) & set(inertia) or inertia.get('method', 'given') != 'given':
+            raise Mistake(f'{key}.given', 'given holds the diagonal or matrix itself; '
+                                          'give no method, diagonal or matrix beside it')
+        inertia.update(nested, method='given')
+        tensor_key = f'{key}.given'
     given = [name for name in ('diagonal', 'matrix') if name in inertia]
     method = inertia.setdefault('method', 'given' if given else 'exact')
     if (method == 'given') != (len(given) == 1):
@@ -133,7 +146,7 @@ def _inertia(value, key):
         try:
             check_inertia(np.diag(inertia[name]) if name == 'diagonal' else inertia[name])
         except ValueError as error:
-            raise Mistake(f'{key}.{name}', str(error)) from None
+            raise Mistake(f'{tensor_key}.{name}', str(error)) from None
     return inertia
 
 
@@ -165,6 +178,9 @@ def _bodies(entries, world_frame, base_dir):
     bodies = tuple(_body(entry, f'bodies[{i}]', base_dir) for i, entry in enumerate(entries))
     names = [body.name for body in bodies]
     for i, name in enumerate(names):
+        # A wrench's frame_id names world axes or a body's axes; one name cannot be both.
+        if name == world_frame:
+            raise Mistake(f'bodies[{i}].name', f'body name {name!r} is the world_frame')
         if name in names[:i]:
             raise Mistake(f'bodies[{i}].name', f'duplicate body name {name!r} '
                                                f'(also bodies[{names.index(name)}])')

@@ -15,8 +15,8 @@ by ``dt``. It is built for a *system*, which provides
 
 To write a new method, subclass :class:`Integrator`, set ``name``, ``order`` and
 ``adaptive``, implement ``_step_impl`` and add the class to the registry in
-``integrators/__init__.py``. ``step`` owns the bookkeeping: it keeps quaternions unit and
-counts right-hand-side evaluations. The state given to ``step`` is never modified.
+``integrators/__init__.py``. ``step`` keeps quaternions unit; ``wrench_rows`` (the
+right-hand side's forces) counts evaluations. The state given to ``step`` is never modified.
 
 Inside, states are component-major: ``rows`` (13, N) is ``y`` transposed, so each component
 of every body is one contiguous row and one numpy call advances all bodies. ``_step_impl``

@@ -4,8 +4,9 @@ Both describe the same motion. They differ in how an orientation error propagate
 Baraff's world-axes ``L``, ``omega = R I_body^-1 R^T L`` depends on ``q``, so every error in
 ``q`` feeds back into ``omega`` and grows. With the body-axes ``L_b = R^T L``,
 ``omega_b = I_body^-1 L_b`` does not depend on ``q`` at all (Euler's equations). Measured
-near the intermediate axis, RK4 is ~1000x more accurate at the same step in body axes
-(docs/accuracy.md). The public state stays Baraff's; only the inside of a step changes.
+near the intermediate axis, RK4 is 1000-2500x more accurate at the same step in body axes
+(../shared/DESIGN.md, docs/accuracy.md). The public state stays Baraff's; only the inside
+of a step changes.
 
 A formulation is built per integrator and owns the buffers of its stages: the integrator
 writes a stage state into ``state`` (13, N) and calls ``slope(time, out)``. States are

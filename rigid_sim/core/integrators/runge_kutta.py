@@ -86,7 +86,7 @@ class ExplicitEuler(ExplicitRungeKutta):
 class RK4World(ExplicitRungeKutta):
     """Classical RK4 on Baraff's world-axes ``L``. Order 4.
 
-    Orientation error feeds back into omega: ~1000x less accurate than ``rk4`` near the
+    Orientation error feeds back into omega: 1000-2500x less accurate than ``rk4`` near the
     intermediate axis at the same step. Kept to show that cost.
     """
 
