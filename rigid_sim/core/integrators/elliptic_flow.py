@@ -30,10 +30,27 @@ def _invariants(i, m):
     return k2, mc, amplitude, rate
 
 
-def _pi_minus(nu, s, c, dn2):
-    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi."""
-    return s * elliprf(c * c, dn2, 1.0) - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0,
-                                                                      1.0 + nu * s * s)
+def _first_kind(s, c, dn2):
+    """Legendre ``F(phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi."""
+    return s * elliprf(c * c, dn2, 1.0)
+
+
+def _pi_minus(nu, s, c, dn2, first_kind):
+    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2; ``first_kind`` is ``F(phi | k^2)``,
+    the Carlson R_F part the two integrals share."""
+    return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
+
+
+def _complete_pi_minus(nu, mc, turns):
+    """``Pi(-nu | k^2)`` where ``turns`` is non-zero, else 0: only a body that passes a half
+    period in the step needs it, and at small steps few do (each costs two Carlson calls)."""
+    complete = np.zeros_like(mc)
+    passing = turns != 0.0
+    if passing.any():
+        nu_p, mc_p = nu[passing], mc[passing]
+        complete[passing] = (elliprf(0.0, mc_p, 1.0)
+                             - nu_p / 3.0 * elliprj(0.0, mc_p, 1.0, 1.0 + nu_p))
+    return complete
 
 
 def shape_constants(i):
@@ -53,7 +70,8 @@ def elliptic_working(i, m, time, ratio, nu):
     h = np.hypot(ratio * m[:, 1], m[:, 0])
     s0 = np.where(h > 0.0, ratio * m[:, 1] / np.where(h > 0.0, h, 1.0), 0.0)
     c0 = np.where(h > 0.0, m[:, 0] / np.where(h > 0.0, h, 1.0), 1.0)
-    u0 = s0 * elliprf(c0 * c0, c0 * c0 + mc * s0 * s0, 1.0)   # F(am0), |am0| <= pi/2
+    dn0_2 = c0 * c0 + mc * s0 * s0
+    u0 = _first_kind(s0, c0, dn0_2)   # F(am0), |am0| <= pi/2
     u1 = u0 + rate * time
     quarter = ellipkm1(mc)   # K, from mc directly (inf on the separatrix)
     with np.errstate(invalid='ignore', divide='ignore'):
@@ -61,9 +79,10 @@ def elliptic_working(i, m, time, ratio, nu):
         shift = np.where(turns != 0.0, 2.0 * turns * quarter, 0.0)
         sn, cn, dn, _ = ellipj(u1 - shift, k2)
         dn2 = cn * cn + mc * sn * sn
-        complete = elliprf(0.0, mc, 1.0) - nu / 3.0 * elliprj(0.0, mc, 1.0, 1.0 + nu)
-        g1 = np.where(turns != 0.0, 2.0 * turns * complete, 0.0) + _pi_minus(nu, sn, cn, dn2)
-    g0 = _pi_minus(nu, s0, c0, c0 * c0 + mc * s0 * s0)
+        # F(am v) = v for |v| <= K: the reduced argument is its own first-kind integral.
+        g1 = (2.0 * turns * _complete_pi_minus(nu, mc, turns)
+              + _pi_minus(nu, sn, cn, dn2, u1 - shift))
+    g0 = _pi_minus(nu, s0, c0, dn0_2, u0)
     sign = 1.0 - 2.0 * np.mod(turns, 2.0)
     m_new = np.stack((amp[:, 0] * sign * cn, amp[:, 1] * sign * sn,
                       np.where(m[:, 2] < 0.0, -1.0, 1.0) * amp[:, 2] * np.sqrt(dn2)), axis=1)
