@@ -45,11 +45,15 @@ CONFIGS = (Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            Config(100, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            Config(100, 100.0, 1e-2, 10, 100.0, 'bodies'),
            Config(1000, 1000.0, 1e-3, 1, 50.0, 'poses'),
-           Config(1000, 50.0, 2e-2, 20, 50.0, 'poses'))
+           Config(1000, 50.0, 2e-2, 20, 50.0, 'poses'),
+           # 20 ms steps, split only where the World's step control asks: no 1 kHz physics,
+           # so no goal counts it; exact_split moves these torque-free boxes exactly anyway.
+           Config(1000, 50.0, 2e-2, 1, 50.0, 'poses'))
 QUICK = dict(configs=(Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
                       Config(10, 100.0, 1e-2, 10, 100.0, 'poses')),
              duration=0.5, warmup=0.3)
-# The issue's node goals: (N, what is listened, wording).
+# The issue's node goals: (N, what is listened, wording), all with 1 kHz physics.
+GOAL_PHYSICS_STEP = 1e-3   # s
 GOALS = ((100, 'bodies', '100 bodies, per-body pose and twist at 100 Hz, 1 kHz physics'),
          (1000, 'poses', '1000 bodies, PoseArray at 50 Hz, 1 kHz physics'))
 
@@ -214,12 +218,18 @@ def table(results):
     return bench.markdown_table(header, rows)
 
 
+def physics_step(config):
+    """The step the integrator is given, s (the World may split it further)."""
+    return config.time_step / config.substeps
+
+
 def goals(results):
     """Markdown lines: each of the issue's node goals, met or not, with the numbers."""
     lines = []
     for bodies, listened, wording in GOALS:
         runs = [r for r in results
-                if (r['config'].bodies, r['config'].listened) == (bodies, listened)]
+                if (r['config'].bodies, r['config'].listened) == (bodies, listened)
+                and physics_step(r['config']) <= GOAL_PHYSICS_STEP * (1 + 1e-9)]
         if not runs:
             continue
         verdicts = [f'{"met" if r["real_time_factor"] >= GOAL_RTF else "NOT met"} by '
@@ -253,7 +263,9 @@ def report(results, seconds):
         'publisher) that the executor adds to its wait set on every `spin_once`, in Python.',
         '', '### Real-time factor and tick time', table(results),
         '', f'### Goals of issue 6 (met: real-time factor >= {GOAL_RTF}; a wall-clock timer '
-        'cannot average above 1, and window edges move it by ~1e-3)', *goals(results)])
+        'cannot average above 1, and window edges move it by ~1e-3; only rows whose '
+        f'integrator steps are <= {1e3 * GOAL_PHYSICS_STEP:g} ms count as 1 kHz physics)',
+        *goals(results)])
 
 
 def add_arguments(parser):
