@@ -22,7 +22,7 @@ from visualization_msgs.msg import MarkerArray
 from rigid_sim import conversions, parameters
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
-from rigid_sim.core.scene import build_world, load_scene, wrench_target
+from rigid_sim.core.scene import build_world, check_world_frame, load_scene, wrench_target
 from rigid_sim.core.state import LINEAR_MOMENTUM, POSITION, ANGULAR_MOMENTUM
 from rigid_sim.resources import find_scene
 
@@ -42,9 +42,19 @@ NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 
 
 def load(settings):
-    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError)."""
+    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError,
+    ParameterError when ``world_frame`` is a frame of the scene)."""
     scene = load_scene(find_scene(settings.scene))
+    check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
+
+
+def check_frames(scene, settings):
+    """ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
+    try:
+        check_world_frame(scene, settings.world_frame)
+    except ValueError as error:
+        raise parameters.ParameterError(f'world_frame: {error}') from None
 
 
 class TickStats:
@@ -196,9 +206,10 @@ class RigidSimNode(Node):
         timeout = self.settings.wrench_timeout
         expires = self.world.time + timeout if timeout > 0.0 else math.inf
         for index, message in inbox:
-            name = self.scene.bodies[index].name
+            body = self.scene.bodies[index]
+            name = body.name
             try:
-                frame, point = wrench_target(self.scene, name, message.header.frame_id,
+                frame, point = wrench_target(body, message.header.frame_id,
                                              self.settings.world_frame)
                 force, torque = conversions.wrench_arrays(message)
                 applied.hold(index, message.header.frame_id, frame, force, torque, point,
@@ -307,6 +318,7 @@ class RigidSimNode(Node):
         current = self.settings
         if scene_set:
             return load(proposed)
+        check_frames(self.scene, proposed)
         if (proposed.integrator, proposed.tolerance) != (current.integrator, current.tolerance):
             return make_integrator(proposed.integrator, self.world, proposed.tolerance)
         return None

@@ -92,6 +92,15 @@ def test_bad_value_at_start_is_refused_naming_parameter_and_reason(
         RigidSimNode(context=ros_context, parameter_overrides=overrides)
 
 
+def test_world_frame_naming_a_body_is_refused_at_start(ros_context, write_scene):
+    """world_frame 'box' would make a wrench with frame_id 'box' both world and body axes."""
+    overrides = [Parameter('scene', value=write_scene(SCENE)), Parameter('world_frame',
+                                                                         value='box')]
+    with pytest.raises(ParameterError, match="world_frame: world_frame 'box' is a frame of "
+                                             "body 'box'"):
+        RigidSimNode(context=ros_context, parameter_overrides=overrides)
+
+
 def test_misspelt_parameter_in_params_file_is_refused(ros_context, write_scene, tmp_path):
     """A params-file key that names no parameter (rat for rate) is refused, not ignored."""
     params = tmp_path / 'params.yaml'
@@ -127,6 +136,8 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
     assert not scene.successful
     assert malformed in scene.reason and 'bodies[0].shape.size' in scene.reason
     assert 'list of 3 numbers' in scene.reason
+    frame, = sim.set_parameters(world_frame='box')
+    assert not frame.successful and "is a frame of body 'box'" in frame.reason
     assert sim.sim.settings == before and sim.sim.get_parameter('rate').value == before.rate
     sim.tick(8)
     position, _, velocity, _, t = sim.state('box')

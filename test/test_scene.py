@@ -16,7 +16,7 @@ from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs
 from rigid_sim.core.scene import (
-    SceneError, build_world, load_scene, parse_scene, wrench_target)
+    SceneError, build_world, check_world_frame, load_scene, parse_scene, wrench_target)
 
 CONFIG = os.path.join(os.path.dirname(__file__), '..', 'config')
 SHIPPED = sorted(glob.glob(os.path.join(CONFIG, 'scenes', '*.yaml')))
@@ -340,22 +340,33 @@ def test_missing_file_is_refused(tmp_path):
     ('box/thruster', ('point', [0.2, 0.0, 0.0]))])
 def test_wrench_target_maps_frame_ids(frame_id, expected):
     """frame_id picks the axes and the point a wrench acts at, as INTERFACE.md tabulates."""
-    frame, point = wrench_target(parse_scene(copy.deepcopy(VALID)), 'box', frame_id, 'world')
+    box = parse_scene(copy.deepcopy(VALID)).bodies[0]
+    frame, point = wrench_target(box, frame_id, 'world')
     assert frame == expected[0]
     assert (point is None) == (expected[1] is None)
     if point is not None:
         np.testing.assert_array_equal(point, expected[1])
 
 
-@pytest.mark.parametrize('body, frame_id, reason', [
-    ('box', 'box/nozzle', "unknown frame_id 'box/nozzle' .*'box/thruster'"),
-    ('box', 'ball', "unknown frame_id 'ball' for body 'box'"),
-    ('box', 'map', "unknown frame_id 'map'.*valid: \\['world', '', 'box'"),
-    ('crate', '', "unknown body 'crate'")])
-def test_wrench_target_refuses_unknown_frames(body, frame_id, reason):
+@pytest.mark.parametrize('frame_id, reason', [
+    ('box/nozzle', "unknown frame_id 'box/nozzle' .*'box/thruster'"),
+    ('ball', "unknown frame_id 'ball' for body 'box'"),
+    ('map', "unknown frame_id 'map'.*valid: \\['world', '', 'box'")])
+def test_wrench_target_refuses_unknown_frames(frame_id, reason):
     """An unknown frame is named, with the frame ids that would be valid."""
     with pytest.raises(ValueError, match=reason):
-        wrench_target(parse_scene(copy.deepcopy(VALID)), body, frame_id, 'world')
+        wrench_target(parse_scene(copy.deepcopy(VALID)).bodies[0], frame_id, 'world')
+
+
+@pytest.mark.parametrize('world_frame, body', [('box', 'box'), ('box/thruster', 'box'),
+                                               ('ball', 'ball')])
+def test_world_frame_naming_a_body_frame_is_refused(world_frame, body):
+    """A world_frame that is also a body or point frame would give frame_id two meanings."""
+    scene = parse_scene(copy.deepcopy(VALID))
+    with pytest.raises(ValueError, match=f"world_frame '{world_frame}' is a frame of body "
+                                         f"'{body}'"):
+        check_world_frame(scene, world_frame)
+    check_world_frame(scene, 'map')   # any other name is fine
 
 
 def test_open_mesh_is_refused(tmp_path):
@@ -366,4 +377,18 @@ def test_open_mesh_is_refused(tmp_path):
     data = {'bodies': [{'name': 'shell', 'mass': 1.0,
                         'shape': {'type': 'mesh', 'file': 'open.stl'}}]}
     with pytest.raises(SceneError, match=r'^s\.yaml: bodies\[0\]\.shape: .*not watertight'):
+        parse_scene(data, 's.yaml', base_dir=str(tmp_path))
+
+
+@pytest.mark.parametrize('name, text', [
+    ('short_vertex.obj', 'v 1 2\nf 1 2 3\n'),
+    ('no_y.ply', 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n'
+                 '1\n2\n3\n'),
+])
+def test_malformed_mesh_file_is_refused_by_name(tmp_path, name, text):
+    """A mesh file its reader cannot parse is a scene mistake naming the file, not a crash."""
+    (tmp_path / name).write_text(text)
+    data = {'bodies': [{'name': 'part', 'mass': 1.0, 'shape': {'type': 'mesh', 'file': name}}]}
+    with pytest.raises(SceneError, match=rf'^s\.yaml: bodies\[0\]\.shape: cannot read mesh '
+                                         rf'file .*{re.escape(name)}'):
         parse_scene(data, 's.yaml', base_dir=str(tmp_path))

@@ -142,8 +142,14 @@ def load_mesh(path, scale=1.0):
     scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,))
     for factor in scale:
         _positive(factor, 'mesh scale')
-    # force='mesh' flattens a scene file into one mesh instead of returning a Scene.
-    mesh = trimesh.load(path, force='mesh')
+    try:
+        # force='mesh' flattens a scene file into one mesh instead of returning a Scene.
+        mesh = trimesh.load(path, force='mesh')
+    except Exception as error:
+        # trimesh's readers raise whatever a malformed file trips (IndexError for a short
+        # OBJ vertex, KeyError for a PLY without y, ...): refuse the file by name instead.
+        raise ValueError(f'cannot read mesh file {path}: {type(error).__name__}: {error}') \
+            from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ValueError(f'no triangles in mesh file {path}')
     mesh.apply_transform(np.diag(np.append(scale, 1.0)))

@@ -302,23 +302,31 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
     return World(bodies, initial, effects, integrator, tolerance)
 
 
-def wrench_target(scene, body_name, frame_id, world_frame):
-    """Where a WrenchStamped with ``frame_id`` acts on ``body_name``: (frame, point).
+def check_world_frame(scene, world_frame):
+    """ValueError if ``world_frame`` is also a body or point frame of ``scene``.
+
+    A wrench's ``frame_id`` would then name both world axes and a body's, so the node
+    refuses such a ``world_frame`` as the scene loader refuses such a body or point name.
+    """
+    for body in scene.bodies:
+        if world_frame in [body.name] + [f'{body.name}/{point}' for point in body.points]:
+            raise ValueError(f'world_frame {world_frame!r} is a frame of body {body.name!r} '
+                             f'in {scene.path}: a wrench frame_id would mean both')
+
+
+def wrench_target(body, frame_id, world_frame):
+    """Where a WrenchStamped with ``frame_id`` acts on ``body`` (a BodySpec): (frame, point).
 
     ``world_frame`` -> ('world', None); ``""`` or ``<body>`` -> ('body', None);
     ``<body>/<point>`` -> ('point', (3,) body-frame coordinates, m). Raises ValueError naming
-    an unknown body or frame and listing the valid frame ids.
+    an unknown frame and listing the valid frame ids.
     """
-    body = next((b for b in scene.bodies if b.name == body_name), None)
-    if body is None:
-        raise ValueError(f'unknown body {body_name!r}; bodies: '
-                         f'{[b.name for b in scene.bodies]}')
     if frame_id == world_frame:
         return 'world', None
-    if frame_id in ('', body_name):
+    if frame_id in ('', body.name):
         return 'body', None
     prefix, _, point = frame_id.partition('/')
-    if prefix == body_name and point in body.points:
+    if prefix == body.name and point in body.points:
         return 'point', body.points[point].copy()
-    valid = [world_frame, '', body_name] + [f'{body_name}/{p}' for p in body.points]
-    raise ValueError(f'unknown frame_id {frame_id!r} for body {body_name!r}; valid: {valid}')
+    valid = [world_frame, '', body.name] + [f'{body.name}/{p}' for p in body.points]
+    raise ValueError(f'unknown frame_id {frame_id!r} for body {body.name!r}; valid: {valid}')
