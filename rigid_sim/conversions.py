@@ -84,8 +84,9 @@ class StateMessages:
         for odometry, pose in zip(self.odometry, shared_poses):
             odometry.pose.pose = pose
 
-    def fill(self, snapshot, indices):
-        """Write the pose, world twist and body twist of the bodies ``indices`` at ``snapshot``.
+    def fill(self, snapshot, posed, moving):
+        """Write the pose of the bodies ``posed`` and the world and body twists of the bodies
+        ``moving`` at ``snapshot`` (index iterables; each message costs Python time).
 
         Every message's stamp is the snapshot's time; the others keep their last values.
         """
@@ -97,9 +98,10 @@ class StateMessages:
         to_time(snapshot.time, self.stamp)
         rows = np.hstack((origin, orientation, velocity, angular_velocity, velocity_body,
                           angular_body)).tolist()
-        for index in indices:
+        for index in posed:
+            _set_pose(self.poses[index].pose, rows[index][0:7])
+        for index in moving:
             row = rows[index]
-            _set_pose(self.poses[index].pose, row[0:7])
             _set_twist(self.twists[index].twist, row[7:13])
             _set_twist(self.odometry[index].twist.twist, row[13:19])
 

@@ -133,7 +133,8 @@ class RigidSimNode(Node):
         s = self.settings
         return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
                 f'{s.integrator} at {s.rate:g} Hz, time_step {s.time_step:g} s x {s.substeps} '
-                f'substeps (real-time factor {s.rate * s.time_step:g}); topics under '
+                f'substeps (real-time factor {s.rate * s.time_step:g}); publishing every '
+                f'{s.publish_every} ticks ({s.rate / s.publish_every:g} Hz); topics under '
                 f'{self.get_fully_qualified_name()}/')
 
     def _wire_scene(self):
@@ -228,17 +229,13 @@ class RigidSimNode(Node):
         now = time.monotonic()
         if now >= self._listeners_due:
             self._listeners_due = now + LISTENER_REFRESH
-            self._listened = [[publisher.get_subscription_count() > 0 for publisher in outputs]
-                              for outputs in self._outputs]
-            self._aggregates = [publisher for publisher in (self._pose_array_publisher,
-                                                            self._markers_publisher)
-                                if publisher.get_subscription_count() > 0]
-        listened = [index for index, wanted in enumerate(self._listened) if any(wanted)]
+            self._find_listeners()
+        listened = self._listened_bodies
         if not (listened or self._aggregates):
             return
-        every_pose = bool(self._aggregates)
-        self._messages.fill(self.world.snapshot(), range(len(self._outputs)) if every_pose
-                            else listened)
+        # The PoseArray and the markers share every body's Pose; twists only where heard.
+        posed = range(len(self._outputs)) if self._aggregates else listened
+        self._messages.fill(self.world.snapshot(), posed, self._moving_bodies)
         for index in listened:
             outputs = (self._messages.poses[index], self._messages.twists[index],
                        self._messages.odometry[index])
@@ -249,6 +246,18 @@ class RigidSimNode(Node):
         for publisher in self._aggregates:
             publisher.publish(self._messages.pose_array if publisher is self._pose_array_publisher
                               else self._messages.markers)
+
+    def _find_listeners(self):
+        """Which outputs have subscribers: per body (pose, twist, odometry) and aggregates."""
+        self._listened = [[publisher.get_subscription_count() > 0 for publisher in outputs]
+                          for outputs in self._outputs]
+        self._listened_bodies = [index for index, wanted in enumerate(self._listened)
+                                 if any(wanted)]
+        self._moving_bodies = [index for index, (_, twist, odometry) in enumerate(self._listened)
+                               if twist or odometry]
+        self._aggregates = [publisher for publisher in (self._pose_array_publisher,
+                                                        self._markers_publisher)
+                            if publisher.get_subscription_count() > 0]
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""

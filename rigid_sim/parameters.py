@@ -26,7 +26,7 @@ class ParameterError(ValueError):
 class Settings:
     """Validated parameter values, as the node uses them."""
 
-    scene: str             # scene file: a path, or a bare name looked up in config/scenes
+    scene: str             # a path, or a bare name looked up in config/, config/scenes/
     rate: float            # Hz of wall time, ticks per second
     time_step: float       # s of simulated time advanced per tick
     substeps: int          # integrator steps per tick
@@ -56,14 +56,16 @@ class Spec:
 
 SPECS = {
     'scene': Spec(str, 'scene YAML file; a bare name is looked up in the working directory, '
-                       'then in share/rigid_sim/config/scenes'),
+                       'then in share/rigid_sim/config and its scenes/'),
     'rate': Spec(float, 'ticks per second of wall time, Hz', 0.0, MAX_RATE, above_low=True),
-    'time_step': Spec(float, 'simulated seconds per tick (default 1/rate); '
-                             'time_step x rate is the real-time factor', 0.0, 10.0,
+    'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start; a later '
+                             'change of rate keeps it); time_step x rate is the real-time '
+                             'factor', 0.0, 10.0,
                       above_low=True),
     'substeps': Spec(int, 'integrator steps per tick', 1, 10000),
     'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
-                                'and markers go out (default rate); at most once per tick',
+                                'and markers go out (default rate at start): every '
+                                'round(rate / publish_rate)-th tick, at most once per tick',
                          0.0, MAX_RATE, above_low=True),
     'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
     'tolerance': Spec(float, 'error target of adaptive integrators', 0.0, 1.0, above_low=True),

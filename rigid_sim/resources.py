@@ -58,7 +58,8 @@ def find_scene(name):
     """Path of the scene file ``name``.
 
     An absolute path, or a path relative to the working directory, is taken as it is;
-    a bare file name not found there is looked up in the packaged ``config/scenes``.
+    a bare file name not found there is looked up in the packaged ``config`` (INTERFACE.md),
+    then in ``config/scenes``, where the shipped scenes are.
 
     Raises
     ------
@@ -70,8 +71,9 @@ def find_scene(name):
         return path.resolve()
     searched = [str(path.resolve())]
     if not path.is_absolute() and len(path.parts) == 1:
-        for config in config_directories():
-            packaged = config / 'scenes' / path
+        for folder in (folder for config in config_directories()
+                       for folder in (config, config / 'scenes')):
+            packaged = folder / path
             if packaged.is_file():
                 return packaged
             searched.append(str(packaged))

@@ -152,6 +152,18 @@ def test_held_wrench_stops_acting_when_it_expires(name):
     assert wrenches.held == {}
 
 
+def test_hold_ends_on_the_step_that_reaches_it_with_decimal_steps():
+    """Ten steps of 0.01 s sum to 1e-17 s short of 0.1 s; a 0.1 s hold still ends there and
+    delivers the impulse F x 0.1 s, not one step more."""
+    world, wrenches = pushed()
+    force = np.array([2.0, -1.0, 0.5])
+    wrenches.hold(0, 'world', 'world', force, expires=0.1)
+    for _ in range(20):
+        world.step(0.01)
+    np.testing.assert_allclose(world.y[0, LINEAR_MOMENTUM], force * 0.1, rtol=1e-12)
+    assert wrenches.held == {}
+
+
 def test_same_key_replaces_and_different_keys_add():
     """A wrench held under the key of an earlier one replaces it; under another key it adds."""
     world, wrenches = pushed()

@@ -1,5 +1,6 @@
 """Packaging: a colcon build gives the layout ``ros2 run`` and the ament index expect, and
-the installed executable starts; the README's test command is the one CI runs."""
+the installed executable starts; the README's test command is the one CI runs; bare scene
+names are found where INTERFACE.md says."""
 import os
 import signal
 import subprocess
@@ -7,6 +8,7 @@ import sys
 import threading
 from pathlib import Path
 
+import pytest
 from ament_index_python.packages import get_package_share_directory
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,3 +89,24 @@ def test_readme_names_every_integrator_and_parameter():
     readme = (ROOT / 'README.md').read_text()
     for name in list(REGISTRY) + list(SPECS):
         assert f'`{name}`' in readme
+
+
+def test_bare_scene_name_is_found_in_config_then_its_scenes(tmp_path, monkeypatch):
+    """A bare name is taken from the working directory, else from the packaged config/ (as
+    INTERFACE.md says), else from config/scenes/; a miss names every place searched."""
+    from rigid_sim import resources
+    config = tmp_path / 'share' / 'config'
+    (config / 'scenes').mkdir(parents=True)
+    (config / 'mine.yaml').write_text('a')
+    (config / 'scenes' / 'mine.yaml').write_text('b')
+    (config / 'scenes' / 'shipped.yaml').write_text('c')
+    monkeypatch.setattr(resources, 'config_directories', lambda: [config])
+    monkeypatch.chdir(tmp_path)
+    assert resources.find_scene('mine.yaml') == config / 'mine.yaml'
+    assert resources.find_scene('shipped.yaml') == config / 'scenes' / 'shipped.yaml'
+    (tmp_path / 'shipped.yaml').write_text('d')
+    assert resources.find_scene('shipped.yaml') == tmp_path / 'shipped.yaml'
+    with pytest.raises(FileNotFoundError) as refused:
+        resources.find_scene('nowhere.yaml')
+    for place in (tmp_path, config, config / 'scenes'):
+        assert str(place / 'nowhere.yaml') in str(refused.value)

@@ -1,7 +1,7 @@
 """Wrenches applied from outside (user commands), held until replaced or timed out.
 
 Each held wrench has a body, a key (the ROS frame_id it came with: a new wrench with the
-same body and key replaces it) and one of three ways to act:
+same body and key replaces it) and one of four ways to act:
 
 ``world``  world axes, at the centre of mass;
 ``body``   body axes, at the centre of mass;
@@ -23,6 +23,10 @@ from rigid_sim.core import rotation
 FRAMES = ('world', 'body', 'point', 'world_point')
 DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
 DEFAULT_MAX_TORQUE = 1.0e4  # N m
+# Simulated time is a running sum of float steps (ten steps of 0.01 s end 1e-17 s short of
+# 0.1), so a hold ends at the step that reaches its end to within this: a ROS stamp's
+# resolution. Without it a 0.1 s hold at 0.01 s steps acted 0.11 s.
+EXPIRY_SLACK = 1e-9   # s
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,7 @@ class AppliedWrenches:
 
     def expire(self, time):
         """Drop wrenches whose hold has run out by simulated ``time``."""
+        time += EXPIRY_SLACK
         if time < self._next_expiry:
             return
         ended = [(w.body, key) for wrenches in self._by_body.values()
