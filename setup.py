@@ -34,7 +34,8 @@ setup(
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
         # benchmarks are tested too.
-        'test': ['pytest', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py'] + BENCH,
+        'test': ['pytest', 'flake8', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py']
+        + BENCH,
         'bench': BENCH,
     },
     zip_safe=True,

@@ -7,8 +7,7 @@ advances the world and publishes. Tests call ``tick()`` directly for determinist
 import math
 import time
 
-import numpy as np
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
@@ -23,7 +22,7 @@ from rigid_sim import conversions, parameters
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene, wrench_target
-from rigid_sim.core.state import LINEAR_MOMENTUM, POSITION, ANGULAR_MOMENTUM
+from rigid_sim.diagnostics_window import TickStats, health, refusal_values, window_values
 from rigid_sim.resources import find_scene
 
 NODE_NAME = 'rigid_sim'
@@ -55,27 +54,6 @@ def check_frames(scene, settings):
         check_world_frame(scene, settings.world_frame)
     except ValueError as error:
         raise parameters.ParameterError(f'world_frame: {error}') from None
-
-
-class TickStats:
-    """Step times and advanced simulated time over one diagnostics window."""
-
-    def __init__(self, sim_time):
-        self.ticks = 0
-        self.step_total = 0.0   # s of wall time spent applying inputs and integrating
-        self.step_max = 0.0     # s, the longest of them
-        self.failed_ticks = 0   # ticks cut short by a step the world gave up
-        self.sim_start = sim_time
-        self.wall_start = time.monotonic()
-
-    def add(self, step_seconds):
-        self.ticks += 1
-        self.step_total += step_seconds
-        self.step_max = max(self.step_max, step_seconds)
-
-    def real_time_factor(self, sim_time):
-        """Simulated seconds advanced per wall second since the window began."""
-        return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
 
 
 class RigidSimNode(Node):
@@ -261,40 +239,15 @@ class RigidSimNode(Node):
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
-        stats, y, safeguards = self._stats, self.world.y, self.world.diagnostics
-        step_mean = stats.step_total / max(stats.ticks, 1)
-        values = {
-            'simulated time [s]': self.world.time, 'paused': self.paused,
-            'integrator': self.settings.integrator,
-            'step time mean [s]': step_mean, 'step time max [s]': stats.step_max,
-            'real-time factor': stats.real_time_factor(self.world.time),
-            'real-time factor target': self.settings.rate * self.settings.time_step,
-            'energy [J]': self.world.energy(),
-            'linear momentum [kg m/s]': y[:, LINEAR_MOMENTUM].sum(axis=0),
-            'angular momentum about the world origin [kg m^2/s]': (
-                y[:, ANGULAR_MOMENTUM] + np.cross(y[:, POSITION], y[:, LINEAR_MOMENTUM])
-            ).sum(axis=0),
-            'substeps of the last step': safeguards.substeps,
-            'why the last step was split': safeguards.reason,
-            'rejected steps': safeguards.rejected_steps,
-            'failed steps': safeguards.failed_steps,
-            'last step failure': safeguards.last_failure,
-            'refused inputs': sum(self.refused.values()),
-            **{f'refused inputs {name}': count for name, count in self.refused.items()},
-            'last refused input': self._last_refusal}
-        level, summary = self._health(stats, step_mean)
+        settings = self.settings
+        values = {'simulated time [s]': self.world.time, 'paused': self.paused,
+                  'integrator': settings.integrator,
+                  **window_values(self._stats, self.world, settings.rate * settings.time_step),
+                  **refusal_values(self.refused, self._last_refusal)}
+        level, summary = health(self._stats, 1.0 / settings.rate)
         self._diagnostics_publisher.publish(conversions.diagnostics(
             f'{self.get_name()}: physics', self.world.time, level, summary, values))
         self._stats = TickStats(self.world.time)
-
-    def _health(self, stats, step_mean):
-        """Diagnostic level and summary of the window that ``stats`` covers."""
-        if stats.failed_ticks:
-            return DiagnosticStatus.ERROR, (f'{stats.failed_ticks} ticks stopped at a step that '
-                                            f'stayed non-finite; state kept')
-        if step_mean > 1.0 / self.settings.rate:
-            return DiagnosticStatus.WARN, 'steps take longer than a tick'
-        return DiagnosticStatus.OK, 'running'
 
     def _on_reset(self, request, response):
         self.world.reset()
@@ -338,6 +291,9 @@ class RigidSimNode(Node):
         if isinstance(prepared, tuple):
             self.scene, self.world = prepared
             self._wire_scene()  # new bodies: new topics, messages and counters
+            # Setting the same file again reloads it too: say that time went back.
+            self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
+                                   'state, time 0, no wrench held')
         else:
             if prepared is not None:
                 self.world.integrator = prepared

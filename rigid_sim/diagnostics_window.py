@@ -1,0 +1,73 @@
+"""What the node reports on /diagnostics: one window of ticks, the world's health, a level.
+
+Kept apart from the node so that the node only wires topics and timers; nothing here talks
+to ROS except the level constants of ``diagnostic_msgs``.
+"""
+import time
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticStatus
+
+from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
+
+
+class TickStats:
+    """Step times and advanced simulated time over one diagnostics window."""
+
+    def __init__(self, sim_time):
+        self.ticks = 0
+        self.step_total = 0.0   # s of wall time spent applying inputs and integrating
+        self.step_max = 0.0     # s, the longest of them
+        self.failed_ticks = 0   # ticks cut short by a step the world gave up
+        self.sim_start = sim_time
+        self.wall_start = time.monotonic()
+
+    def add(self, step_seconds):
+        self.ticks += 1
+        self.step_total += step_seconds
+        self.step_max = max(self.step_max, step_seconds)
+
+    @property
+    def step_mean(self):
+        """Mean wall seconds per tick spent applying inputs and integrating."""
+        return self.step_total / max(self.ticks, 1)
+
+    def real_time_factor(self, sim_time):
+        """Simulated seconds advanced per wall second since the window began."""
+        return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
+
+
+def window_values(stats, world, target_real_time_factor):
+    """Key -> value of the window's timing and the world's state and safeguards."""
+    y, safeguards = world.y, world.diagnostics
+    return {
+        'step time mean [s]': stats.step_mean, 'step time max [s]': stats.step_max,
+        'real-time factor': stats.real_time_factor(world.time),
+        'real-time factor target': target_real_time_factor,
+        'energy [J]': world.energy(),
+        'linear momentum [kg m/s]': y[:, LINEAR_MOMENTUM].sum(axis=0),
+        'angular momentum about the world origin [kg m^2/s]': (
+            y[:, ANGULAR_MOMENTUM] + np.cross(y[:, POSITION], y[:, LINEAR_MOMENTUM])
+        ).sum(axis=0),
+        'substeps of the last step': safeguards.substeps,
+        'why the last step was split': safeguards.reason,
+        'rejected steps': safeguards.rejected_steps,
+        'failed steps': safeguards.failed_steps,
+        'last step failure': safeguards.last_failure}
+
+
+def refusal_values(refused, last_refusal):
+    """Key -> value of refused inputs: the total, per body, and the last reason."""
+    return {'refused inputs': sum(refused.values()),
+            **{f'refused inputs {name}': count for name, count in refused.items()},
+            'last refused input': last_refusal}
+
+
+def health(stats, tick_period):
+    """Diagnostic level and summary of the window that ``stats`` covers."""
+    if stats.failed_ticks:
+        return DiagnosticStatus.ERROR, (f'{stats.failed_ticks} ticks stopped at a step that '
+                                        f'stayed non-finite; state kept')
+    if stats.step_mean > tick_period:
+        return DiagnosticStatus.WARN, 'steps take longer than a tick'
+    return DiagnosticStatus.OK, 'running'
