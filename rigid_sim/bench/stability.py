@@ -3,10 +3,12 @@
 Each case is a world with a known energy history (constant, or ``exp(-2 c t)`` under
 momentum damping) and known invariants. Every registered integrator runs it bare
 (``auto_substep=False``) and the default one also with its safeguards; the outcome table
-goes into ``docs/stability.md``. ``test/test_stability.py`` runs short versions.
+is printed and, with ``--out``, written into a Markdown file (``docs/stability.md``).
+``test/test_stability.py`` runs short versions.
 """
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -276,8 +278,7 @@ def add_arguments(parser):
     parser.add_argument('--long', action='store_true',
                         help='run the default integrator for each case\'s long duration '
                              '(1e6 steps for long_run) instead of the test duration')
-    parser.add_argument('--output', default='docs/stability.md',
-                        help='Markdown file whose stability section is replaced')
+    parser.add_argument('--out', type=Path, help='Markdown file whose section is (re)written')
 
 
 def main(args):
@@ -295,4 +296,5 @@ def main(args):
     body = '\n'.join([f'Command: `{bench.command_line()}`', ''] + bench.machine_description()
                      + [f'- CPU time of the whole run: {seconds:.0f} s', '',
                         bench.markdown_table(header, rows)])
-    bench.write_section(args.output, SECTION, body)
+    if args.out:
+        bench.write_section(args.out, SECTION, body)
