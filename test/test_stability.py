@@ -11,6 +11,7 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
+from rigid_sim.bench import cases as accuracy_cases
 from rigid_sim.bench import stability as hard
 from rigid_sim.core import rotation, safeguards
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
@@ -208,6 +209,19 @@ def test_step_that_stays_non_finite_keeps_the_last_good_state():
     assert 'non-finite' in diagnostics.last_failure
     world.reset()
     assert world.diagnostics == safeguards.StepDiagnostics()
+
+
+def test_a_step_that_loses_the_orientation_is_rejected():
+    """RK4 on world L over one 20 s step of a tumbling body overflows q, which then
+    normalises to zeros: finite, but no rotation. The World refuses that like a NaN and
+    retries smaller, so every quaternion it keeps is a unit one."""
+    world = accuracy_cases.CASES_BY_KEY['tumbling'].build('rk4_world')
+    assert not world.auto_substep   # nothing but the retry stands between q and overflow
+    world.step(20.0)
+    np.testing.assert_allclose(np.linalg.norm(world.y[:, ORIENTATION], axis=1), 1.0,
+                               rtol=1e-12)
+    assert world.diagnostics.rejected_steps >= 1
+    assert 'orientation lost' in world.diagnostics.last_failure
 
 
 def test_unlisted_effects_cost_nothing(monkeypatch):

@@ -48,6 +48,9 @@ KEEP_MARGIN = 1.5
 MAX_SUBSTEPS = 1000
 # A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
 MAX_HALVINGS = 4
+# Integrators return unit quaternions. One off by more than this overflowed before it was
+# normalised (to zeros: finite, but no rotation at all), and it is treated like a NaN.
+UNIT_QUATERNION_SLACK = 1e-6
 
 
 @dataclass(frozen=True)
@@ -192,7 +195,8 @@ class StepGuard:
 
 
 def finite_steps(integrator, y, time, dt, substeps):
-    """``y`` advanced by ``dt`` in ``substeps`` equal steps, or (None, why) at a non-finite value.
+    """``y`` advanced by ``dt`` in ``substeps`` equal steps, or (None, why) at a non-finite value
+    or a lost orientation.
 
     Returns (state (N, 13) or None, '' or the failure). Floating-point warnings are silenced
     here because a non-finite result is handled, not reported twice.
@@ -204,6 +208,10 @@ def finite_steps(integrator, y, time, dt, substeps):
                 y = integrator.step(y, time + k * h, h)
                 if not np.isfinite(y).all():
                     return None, f'non-finite state in substep {k + 1}/{substeps} of {h:.3g} s'
+                q = y[:, ORIENTATION]
+                if np.any(np.abs(np.einsum('ij,ij->i', q, q) - 1.0) > UNIT_QUATERNION_SLACK):
+                    return None, (f'orientation lost (quaternion overflowed) in substep '
+                                  f'{k + 1}/{substeps} of {h:.3g} s')
     except ArithmeticError as error:   # dopri5 raises when its step size collapses
         return None, f'{type(error).__name__}: {error}'
     return y, ''
