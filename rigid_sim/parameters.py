@@ -26,7 +26,7 @@ class ParameterError(ValueError):
 class Settings:
     """Validated parameter values, as the node uses them."""
 
-    scene: str             # a path, or a bare name looked up in config/, config/scenes/
+    scene: str             # a path; a bare name: working dir, then config/, config/scenes/
     rate: float            # Hz of wall time, ticks per second
     time_step: float       # s of simulated time advanced per tick
     substeps: int          # integrator steps per tick

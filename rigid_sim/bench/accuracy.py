@@ -63,6 +63,8 @@ def measure_rigid(case, setting, repeats, budget, method):
     with np.errstate(all='ignore'):   # a diverged run's energy overflows; it is scored so
         final = (y[ORIENTATION], world.snapshot().angular_velocity[0], case.energy(world),
                  y[ANGULAR_MOMENTUM], y[POSITION])
+    if world.diagnostics.failed_steps:   # the World kept an earlier state: nothing to score
+        final = tuple(np.full(np.shape(part), np.nan) for part in final)
     return score(case, method, setting, adaptive, final, (energy0, momentum0),
                  float(world.integrator.evaluations), cpu_time)
 

@@ -137,6 +137,8 @@ def score(case, method, setting, adaptive, final, start, evaluations, cpu_time):
     if not abs(np.linalg.norm(q) - 1.0) < UNIT_QUATERNION_SLACK:
         errors[0] = np.inf   # an overflowed q normalises to zeros, at "angle 0"
     errors = [float(v) if np.isfinite(v) else np.inf for v in errors]
+    if case.torque_free and not np.isfinite(momentum_drift):
+        momentum_drift = np.inf
     return Result(case.key, method, setting, adaptive, *errors, float(momentum_drift),
                   evaluations, cpu_time)
 

@@ -40,8 +40,8 @@ SYMPLECTIC_EULER_BOUND = 0.9 * 2.0
 # The substep count drops only when the need (the fractions of the bounds, added) has fallen
 # so far that this margin over it still fits in fewer. Every change of step size moves the
 # modified energy a symplectic method conserves, so a need hovering at a whole number must not
-# flip the count: one body doing that 82 times in 2e4 steps erred 2.5e-4 in energy, ten times
-# as much as at either step size held (rigid_sim_bench stability, long run).
+# flip the count: one body doing that 82 times in 2e4 steps erred 2.5e-4 in energy, 2.6 and 10
+# times as much as with 1 or 2 substeps held (rigid_sim_bench stability, long run).
 KEEP_MARGIN = 1.5
 # More substeps than this would stall the caller (a node's tick); the step then runs at the
 # cap and the reason says so.

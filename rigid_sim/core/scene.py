@@ -128,6 +128,8 @@ def _inertia(value, key):
     tensor_key = key
     if 'given' in inertia:
         nested = inertia.pop('given')
+        if not nested:
+            raise Mistake(f'{key}.given', 'expected a diagonal or a matrix, got neither')
         if set(nested) & set(inertia) or inertia.get('method', 'given') != 'given':
             raise Mistake(f'{key}.given', 'given holds the diagonal or matrix itself; '
                                           'give no method, diagonal or matrix beside it')
