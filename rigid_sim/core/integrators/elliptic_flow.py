@@ -8,6 +8,22 @@ from scipy.special import ellipj, ellipkm1, elliprf, elliprj
 
 from rigid_sim.core import rotation
 
+# Near the separatrix (a spin close to the intermediate axis) cn(u) is as small as
+# ~sqrt(mc) over most of a period, and the orientation needs it to its own relative accuracy:
+# the third-kind integral's slope there is 1 / dn ~ 1 / sqrt(mc). scipy's ellipj takes only
+# m = 1 - mc and returns cn = cos(am u) to an absolute eps: an orientation error of
+# ~eps / sqrt(mc) per step (1e-4 rad at mc ~ 1e-24, O(1) once m rounds to 1; 1e-13 at this
+# mc). Below it, sn and cn come from mc itself.
+NEAR_SEPARATRIX = 1e-6
+# Below this mc, sn and cn on [0, K/2] are tanh and sech with their first-order correction in
+# mc (Abramowitz and Stegun 16.15), whose error there is below ~16 mc relative.
+EXPANSION_MC = 1e-16
+# The arithmetic-geometric mean stops once c_n / a_n is below this: it converges
+# quadratically, so the next ratio would be ~1e-18, and rounding keeps c_n ~ eps a_n from
+# ever falling much below that (about 9 steps from mc = 1e-30, 12 from mc = 1e-300).
+AGM_TOL = 1e-9
+AGM_MAX_STEPS = 64
+
 
 def separatrix_gap(i, m):
     """``L^2 - 2 E I2``, summed without cancelling the I2 term."""
@@ -53,6 +69,64 @@ def _complete_pi_minus(nu, mc, turns):
     return complete
 
 
+def sn_cn_complementary(u, mc):
+    """Jacobi ``sn`` and ``cn`` of ``u`` (N,) at parameter ``m = 1 - mc``, from ``mc`` (N,).
+
+    Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
+    mean of (1, sqrt(mc)) gives a_n and c_n = (a_{n-1} - b_{n-1}) / 2 until c_N vanishes;
+    then phi_N = 2^N a_N u and ``phi_{n-1} = (phi_n + arcsin(c_n / a_n sin phi_n)) / 2``
+    down to the amplitude phi_0: sn = sin phi_0, cn = cos phi_0. Started from mc itself, it
+    keeps the accuracy scipy's ``ellipj(u, 1 - mc)`` loses for small mc. Needs mc > 0.
+    """
+    a, b = np.ones_like(mc), np.sqrt(mc)
+    ratios = []
+    for _ in range(AGM_MAX_STEPS):
+        c = 0.5 * (a - b)
+        a, b = 0.5 * (a + b), np.sqrt(a * b)
+        ratios.append(c / a)
+        if np.all(ratios[-1] < AGM_TOL):
+            break
+    phi = 2.0 ** len(ratios) * a * u
+    for ratio in reversed(ratios):
+        phi = 0.5 * (phi + np.arcsin(ratio * np.sin(phi)))
+    return np.sin(phi), np.cos(phi)
+
+
+def _sn_cn_first_order(u, mc):
+    """``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2), each to its
+    relative accuracy for |u| <= K/2."""
+    sech, tanh = 1.0 / np.cosh(u), np.tanh(u)
+    correction = 0.25 * mc * (np.sinh(u) * np.cosh(u) - u) * sech
+    return tanh + correction * sech, sech - correction * tanh
+
+
+def _sn_cn_near_separatrix(v, mc, quarter):
+    """``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX, cn to its relative
+    accuracy. Beyond K/2, ``sn(K - w) = cd(w)`` and ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8)
+    give cn as sqrt(mc) times a number of order one, not as the cosine of an angle near pi/2.
+    """
+    far = np.abs(v) > 0.5 * quarter
+    w = np.where(far, quarter - np.abs(v), np.abs(v))
+    tiny = mc < EXPANSION_MC
+    sn_w, cn_w = np.empty_like(w), np.empty_like(w)
+    sn_w[tiny], cn_w[tiny] = _sn_cn_first_order(w[tiny], mc[tiny])
+    sn_w[~tiny], cn_w[~tiny] = sn_cn_complementary(w[~tiny], mc[~tiny])
+    dn_w = np.sqrt(cn_w * cn_w + mc * sn_w * sn_w)
+    sn = np.where(far, cn_w / dn_w, sn_w)
+    cn = np.where(far, np.sqrt(mc) * sn_w / dn_w, cn_w)
+    return np.sign(v) * sn, cn
+
+
+def _jacobi_sn_cn(v, k2, mc, quarter):
+    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``: scipy's ``ellipj``, or from
+    ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech are exact)."""
+    sn, cn, _, _ = ellipj(v, k2)
+    near = (mc > 0.0) & (mc < NEAR_SEPARATRIX)
+    if near.any():   # rare: skip the ~40 numpy calls of an empty branch
+        sn[near], cn[near] = _sn_cn_near_separatrix(v[near], mc[near], quarter[near])
+    return sn, cn
+
+
 def shape_constants(i):
     """``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments (N, 3)."""
     i1, i2, i3 = i.T
@@ -77,7 +151,7 @@ def elliptic_working(i, m, time, ratio, nu):
     with np.errstate(invalid='ignore', divide='ignore'):
         turns = np.where(np.isfinite(quarter), np.round(u1 / (2.0 * quarter)), 0.0)
         shift = np.where(turns != 0.0, 2.0 * turns * quarter, 0.0)
-        sn, cn, dn, _ = ellipj(u1 - shift, k2)
+        sn, cn = _jacobi_sn_cn(u1 - shift, k2, mc, quarter)
         dn2 = cn * cn + mc * sn * sn
         # F(am v) = v for |v| <= K: the reduced argument is its own first-kind integral.
         g1 = (2.0 * turns * _complete_pi_minus(nu, mc, turns)
