@@ -250,10 +250,7 @@ class RigidSimNode(Node):
         self._stats = TickStats(self.world.time)
 
     def _on_reset(self, request, response):
-        self.world.reset()
-        applied = self.world.effect(AppliedWrenches)
-        if applied is not None:
-            applied.release()
+        self.world.reset()   # drops held wrenches too
         self._inbox.clear()
         self._stats = TickStats(self.world.time)
         response.success, response.message = True, 'back to the initial state at time 0'

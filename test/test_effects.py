@@ -164,6 +164,27 @@ def test_hold_ends_on_the_step_that_reaches_it_with_decimal_steps():
     assert wrenches.held == {}
 
 
+def test_non_finite_point_of_application_is_refused():
+    """A force at a NaN point would make every later step non-finite: refused, nothing held."""
+    world, wrenches = pushed()
+    for frame in ('point', 'world_point'):
+        with pytest.raises(ValueError, match='non-finite point'):
+            wrenches.hold(0, 'k', frame, [1.0, 0.0, 0.0], point=[np.nan, 0.0, 0.0])
+    assert wrenches.held == {}
+
+
+def test_reset_drops_held_wrenches():
+    """A push held at t = 10 s until 10.1 s belongs to that run: after a reset to t = 0 the
+    bodies are free again, so they stay at rest."""
+    world, wrenches = pushed()
+    cases.advance(world, 0.125, 10.0)
+    wrenches.hold(0, 'world', 'world', [2.0, 0.0, 0.0], expires=10.1)
+    world.reset()
+    cases.advance(world, 0.125, 5.0)
+    np.testing.assert_array_equal(world.y[:, LINEAR_MOMENTUM], 0.0)
+    assert wrenches.held == {}
+
+
 def test_same_key_replaces_and_different_keys_add():
     """A wrench held under the key of an earlier one replaces it; under another key it adds."""
     world, wrenches = pushed()

@@ -302,6 +302,19 @@ def test_non_physical_bodies_are_refused(mass, inertia, why):
         RigidBodies(('b',), np.array([mass]), inertia[None], np.zeros((1, 3)))
 
 
+@pytest.mark.parametrize('names, mass, inertia, com, why', [
+    ((), np.ones(0), np.ones((0, 3, 3)), np.zeros((0, 3)), 'at least one body'),
+    (('a', 'b'), np.ones(2), np.eye(3)[None], np.zeros((2, 3)), 'inertia_body must have'),
+    (('a',), np.ones(2), np.eye(3)[None], np.zeros((1, 3)), 'mass must have shape'),
+    (('a',), np.ones(1), np.eye(3)[None], np.zeros((1, 2)), 'com_in_body must have'),
+    (('a',), np.ones(1), np.eye(3)[None], np.full((1, 3), np.nan), 'finite')])
+def test_inconsistent_bodies_are_refused(names, mass, inertia, com, why):
+    """Every per-body array has one entry per name (one inertia for two bodies would be
+    broadcast silently), a world has a body, and centres of mass are finite."""
+    with pytest.raises(ValueError, match=why):
+        RigidBodies(names, mass, inertia, com)
+
+
 def test_damped_angular_momentum_decays_exactly():
     """tau = -c L keeps L's direction and scales it by exp(-c t) whatever the tumbling, up to
     the explicit-midpoint kick's error c^3 h^2 t / 6 (its e^-x - (1 - x + x^2/2) per step)."""

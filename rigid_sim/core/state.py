@@ -29,6 +29,18 @@ class RigidBodies:
     com_in_body: np.ndarray   # (N, 3) m, centre of mass in body-frame coordinates
 
     def __post_init__(self):
+        count = len(self.names)
+        shapes = {'mass': ((count,), self.mass),
+                  'inertia_body': ((count, 3, 3), self.inertia_body),
+                  'com_in_body': ((count, 3), self.com_in_body)}
+        if count == 0:
+            raise ValueError('a world needs at least one body')
+        for field, (shape, value) in shapes.items():
+            if np.shape(value) != shape:
+                raise ValueError(f'{field} must have shape {shape} for {count} bodies, got '
+                                 f'{np.shape(value)}')
+        if not np.all(np.isfinite(self.com_in_body)):
+            raise ValueError(f'centres of mass must be finite, got {self.com_in_body}')
         mass = np.asarray(self.mass, dtype=float)
         if not np.all(np.isfinite(mass) & (mass > 0.0)):
             raise ValueError(f'masses must be finite and positive, got {mass}')

@@ -2,6 +2,7 @@
 import numpy as np
 
 from rigid_sim.core import safeguards
+from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.state import STATE_WIDTH, Snapshot
 
@@ -38,14 +39,23 @@ class World:
         self.integrator = make_integrator(integrator, self, tolerance)
         self.auto_substep = bool(auto_substep)
         self._guard = safeguards.StepGuard(bodies, self.effects)
-        self.reset()
+        self._restart()   # keeps wrenches the effects were given before the world was built
 
     def effect(self, kind):
         """The effect of class ``kind`` in this world, or None when the scene has none."""
         return next((e for e in self.effects if isinstance(e, kind)), None)
 
     def reset(self):
-        """Back to the initial state at time 0."""
+        """Back to the initial state at time 0, with no wrench held.
+
+        A held wrench belongs to the run that set it: its hold ends at a time of that run.
+        """
+        self._restart()
+        applied = self.effect(AppliedWrenches)
+        if applied is not None:
+            applied.release()
+
+    def _restart(self):
         self.y = self.initial.copy()
         self.time = 0.0
         self.diagnostics = safeguards.StepDiagnostics()

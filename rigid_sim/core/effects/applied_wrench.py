@@ -93,7 +93,10 @@ class AppliedWrenches:
         force, torque = self.check(force, torque)
         lever = np.zeros(3)
         if frame in ('point', 'world_point'):
-            lever = np.asarray(point, dtype=float).reshape(3) - self._bodies.com_in_body[body]
+            point = np.asarray(point, dtype=float).reshape(3)
+            if not np.all(np.isfinite(point)):
+                raise ValueError(f'non-finite point of application {point}')
+            lever = point - self._bodies.com_in_body[body]
         if frame == 'point':
             torque = torque + np.cross(lever, force)
             frame = 'body'
