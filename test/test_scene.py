@@ -250,6 +250,8 @@ MISTAKES = [  # (change, key path named, reason)
     (put(*SPRING1, 'other', 'crate'), 'effects.springs[1].other', "no body named 'crate'"),
     (put(*SPRING0, 'other', 'ball'), 'effects.springs[0]', 'exactly one of anchor .* or other'),
     (drop(*SPRING1, 'other'), 'effects.springs[1]', 'exactly one of anchor'),
+    (put(*SPRING0, 'anchor', [0.2, 0.0, 1.0]), 'effects.springs[0]',
+     r'both ends at \[0.2, 0.0, 1.0\]: with rest_length 0.1'),
     (put(*SPRING0, 'stiffness', -1.0), 'effects.springs[0].stiffness', 'must be non-negative'),
     (put(*SPRING0, 'damping', -0.1), 'effects.springs[0].damping', 'must be non-negative'),
     (put(*SPRING0, 'rest_length', -0.1), 'effects.springs[0].rest_length', 'non-negative'),

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from rigid_sim.core import rotation
 from rigid_sim.core.effects.applied_wrench import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects.damping import Damping
@@ -27,6 +28,8 @@ from rigid_sim.core.scene_fields import (
     positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
+# Spring ends closer than this fraction of the rest length count as one point.
+COINCIDENT = 1e-9
 
 
 class SceneError(ValueError):
@@ -195,6 +198,25 @@ def _bodies(entries, world_frame, base_dir):
     return bodies
 
 
+def _end_in_world(body, point):
+    """(3,) world position of body-frame ``point`` of ``body`` (a BodySpec) at the start."""
+    return body.origin + rotation.rotate(rotation.to_matrix(body.orientation[None]),
+                                         np.asarray(point, dtype=float)[None])[0]
+
+
+def _check_spring_ends_apart(spec, key, bodies):
+    """A spring with a rest length must not start with both ends at one point: its force
+    ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero)."""
+    if spec.rest_length == 0.0:
+        return
+    start = _end_in_world(bodies[spec.body], spec.point)
+    end = (spec.anchor if spec.other is None
+           else _end_in_world(bodies[spec.other], spec.other_point))
+    if np.linalg.norm(end - start) <= COINCIDENT * spec.rest_length:
+        raise Mistake(key, f'the spring starts with both ends at {start.tolist()}: with '
+                           f'rest_length {spec.rest_length} its force has no direction')
+
+
 def _spring(spring, key, names):
     """A :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
     if ('anchor' in spring) == ('other' in spring):
@@ -226,6 +248,8 @@ def parse_scene(data, path='<memory>', base_dir='.'):
         names = [body.name for body in bodies]
         springs = tuple(_spring(spring, f'effects.springs[{i}]', names)
                         for i, spring in enumerate(effects.pop('springs', ())))
+        for i, spec in enumerate(springs):
+            _check_spring_ends_apart(spec, f'effects.springs[{i}]', bodies)
         if springs:  # an empty list lists no spring: nothing to build
             effects['springs'] = springs
     except Mistake as mistake:
