@@ -69,7 +69,7 @@ def _complete_pi_minus(nu, mc, turns):
     return complete
 
 
-def sn_cn_complementary(u, mc):
+def _sn_cn_complementary(u, mc):
     """Jacobi ``sn`` and ``cn`` of ``u`` (N,) at parameter ``m = 1 - mc``, from ``mc`` (N,).
 
     Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
@@ -110,7 +110,7 @@ def _sn_cn_near_separatrix(v, mc, quarter):
     tiny = mc < EXPANSION_MC
     sn_w, cn_w = np.empty_like(w), np.empty_like(w)
     sn_w[tiny], cn_w[tiny] = _sn_cn_first_order(w[tiny], mc[tiny])
-    sn_w[~tiny], cn_w[~tiny] = sn_cn_complementary(w[~tiny], mc[~tiny])
+    sn_w[~tiny], cn_w[~tiny] = _sn_cn_complementary(w[~tiny], mc[~tiny])
     dn_w = np.sqrt(cn_w * cn_w + mc * sn_w * sn_w)
     sn = np.where(far, cn_w / dn_w, sn_w)
     cn = np.where(far, np.sqrt(mc) * sn_w / dn_w, cn_w)
