@@ -164,6 +164,20 @@ def test_hold_ends_on_the_step_that_reaches_it_with_decimal_steps():
     assert wrenches.held == {}
 
 
+def test_replacing_a_timed_hold_gives_the_new_one_its_own_end():
+    """A hold replaced under its key before it ends acts until the new end, not the old one:
+    0.5 s at F, then the replacement, 2 N until t = 1.5 s, so P(1 s) = F 0.25 + F2 0.75."""
+    world, wrenches = pushed()
+    force, replacement = np.array([2.0, 0.0, 0.0]), np.array([0.0, 2.0, 0.0])
+    wrenches.hold(0, 'k', 'world', force, expires=0.5)
+    cases.advance(world, 0.125, 0.25)
+    wrenches.hold(0, 'k', 'world', replacement, expires=1.5)
+    cases.advance(world, 0.125, 0.75)
+    np.testing.assert_allclose(world.y[0, LINEAR_MOMENTUM], force * 0.25 + replacement * 0.75,
+                               rtol=1e-12)
+    assert set(wrenches.held) == {(0, 'k')}
+
+
 def test_non_finite_point_of_application_is_refused():
     """A force at a NaN point would make every later step non-finite: refused, nothing held."""
     world, wrenches = pushed()

@@ -14,6 +14,9 @@ the centre of mass ``c``, so every held wrench folds into four (N, 3) sums (worl
 torque, body force and torque) rebuilt only when the holdings change; a stage then costs
 two rotations whatever the number of wrenches.
 """
+import heapq
+import itertools
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,8 +65,13 @@ class AppliedWrenches:
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
         self.velocity_dependent = False
-        self._next_expiry = np.inf
+        # Held wrenches per frame, and a heap of (expires, order, body, key, wrench): a hold
+        # that changes or ends costs O(log n), not a walk over all n held wrenches.
+        self._frame_counts = Counter()
+        self._expiries = []
+        self._order = itertools.count()
         self._stale = True
+        self._points_stale = True
 
     def check(self, force, torque):
         """Finite (3,) force and torque within the limits, or ValueError saying why."""
@@ -101,12 +109,15 @@ class AppliedWrenches:
             torque = torque + np.cross(lever, force)
             frame = 'body'
         held = HeldWrench(body, frame, force, torque, lever, float(expires))
+        if key in self._by_body.get(body, {}):
+            self._take(body, key)
         self._by_body.setdefault(body, {})[key] = held
-        self._at_points.pop((body, key), None)
+        self._frame_counts[frame] += 1
         if frame == 'world_point':
             self._at_points[(body, key)] = held
-        # Replacing a wrench may leave this early: expire() then just finds nothing to drop.
-        self._next_expiry = min(self._next_expiry, held.expires)
+            self._points_stale = True
+        if held.expires < np.inf:
+            heapq.heappush(self._expiries, (held.expires, next(self._order), body, key, held))
         self._resum(body)
 
     def release(self, body=None, key=None):
@@ -115,27 +126,36 @@ class AppliedWrenches:
             dropped = list(self._by_body)
             self._by_body.clear()
             self._at_points.clear()
+            self._frame_counts.clear()
+            self._expiries.clear()
+            self._points_stale = True
         else:
             dropped = [body]
-            self._by_body.get(body, {}).pop(key, None)
-            self._at_points.pop((body, key), None)
+            if key in self._by_body.get(body, {}):
+                self._take(body, key)
         for index in dropped:
             self._resum(index)
 
     def expire(self, time):
         """Drop wrenches whose hold has run out by simulated ``time``."""
         time += EXPIRY_SLACK
-        if time < self._next_expiry:
-            return
-        ended = [(w.body, key) for wrenches in self._by_body.values()
-                 for key, w in wrenches.items() if w.expires <= time]
-        for body, key in ended:
-            del self._by_body[body][key]
-            self._at_points.pop((body, key), None)
-        for body in {body for body, _ in ended}:
+        ended = set()
+        while self._expiries and self._expiries[0][0] <= time:
+            _, _, body, key, held = heapq.heappop(self._expiries)
+            # Entries of wrenches replaced or released since are skipped as they come up.
+            if self._by_body.get(body, {}).get(key) is held:
+                self._take(body, key)
+                ended.add(body)
+        for body in ended:
             self._resum(body)
-        self._next_expiry = min((w.expires for wrenches in self._by_body.values()
-                                 for w in wrenches.values()), default=np.inf)
+
+    def _take(self, body, key):
+        """Remove the wrench held on ``body`` under ``key`` (the sums are left to _resum)."""
+        held = self._by_body[body].pop(key)
+        self._frame_counts[held.frame] -= 1
+        if held.frame == 'world_point':
+            del self._at_points[(body, key)]
+            self._points_stale = True
 
     def _resum(self, body):
         """Re-add the wrenches held on ``body`` into the sums, in the order they came."""
@@ -152,13 +172,15 @@ class AppliedWrenches:
 
     def _refresh(self):
         """Which sums are in use and the world_point arrays, after the holdings changed."""
-        frames = {w.frame for wrenches in self._by_body.values() for w in wrenches.values()}
-        self._any_world = bool(frames - {'body'})
-        self._any_body = 'body' in frames
-        at_points = list(self._at_points.values())
-        self._point_body = np.array([w.body for w in at_points], dtype=int)
-        self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3).T.copy()
-        self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3).T.copy()
+        counts = self._frame_counts
+        self._any_world = counts['world'] + counts['world_point'] > 0
+        self._any_body = counts['body'] > 0
+        if self._points_stale:
+            at_points = list(self._at_points.values())
+            self._point_body = np.array([w.body for w in at_points], dtype=int)
+            self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3).T.copy()
+            self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3).T.copy()
+            self._points_stale = False
         self._stale = False
 
     @property
