@@ -23,6 +23,7 @@ from scipy.integrate import solve_ivp
 from rigid_sim.core import rotation
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.effects.springs import SpringSpec, Springs
+from rigid_sim.core.safeguards import UNIT_QUATERNION_SLACK
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
 
@@ -34,7 +35,6 @@ ORACLE_TOLERANCE = 1e-13
 SPRING_STIFFNESS = (2.0 * np.pi) ** 2   # N/m: 1 Hz with 1 kg
 SPRING_DAMPING = 0.2                    # N s/m: damping ratio 0.016, underdamped
 SPRING_START = (np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))   # x0 (m), v0 (m/s)
-UNIT_QUATERNION_SLACK = 1e-6   # a finished run's q is unit to round-off, or it diverged
 PUSH_FORCE = np.array([0.0, 0.0, -2.0])   # N, world axes, held constant
 PUSH_POINT = np.array([0.1, 0.05, 0.0])   # m, body frame (the centre of mass is the origin)
 
@@ -135,7 +135,8 @@ def score(case, method, setting, adaptive, final, start, evaluations, cpu_time):
         momentum_drift = (abs(np.linalg.norm(momentum) - start[1]) / start[1]
                           if case.torque_free else np.nan)
     if not abs(np.linalg.norm(q) - 1.0) < UNIT_QUATERNION_SLACK:
-        errors[0] = np.inf   # an overflowed q normalises to zeros, at "angle 0"
+        errors[0] = np.inf   # an overflowed q normalises to zeros, at "angle 0"; the World
+        # refuses such steps, MuJoCo's runs come here unchecked
     errors = [float(v) if np.isfinite(v) else np.inf for v in errors]
     if case.torque_free and not np.isfinite(momentum_drift):
         momentum_drift = np.inf
