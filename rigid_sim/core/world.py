@@ -68,6 +68,10 @@ class World:
             effect.accumulate(snapshot, force, torque)
         return force, torque
 
+    def net_wrench(self):
+        """Net world force and torque about the centre of mass now, (N, 3) each, N and N m."""
+        return self.wrench(self.snapshot())
+
     def step(self, dt):
         """Advance every body by ``dt`` seconds of simulated time, in substeps if needed.
 
