@@ -69,8 +69,11 @@ class RigidSimNode(Node):
         self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame)
         self.inputs = BodyInputs(self, self.scene)
-        self.control = SimControl(self, self.reset, lambda: self.world.time)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
+        self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
+                                  step=self.step, now=lambda: self.world.time,
+                                  paused_changed=self.loop.set_paused)
+        self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
@@ -99,17 +102,34 @@ class RigidSimNode(Node):
 
     def _describe(self):
         s = self.settings
+        pace = (f'at {s.rate:g} Hz' if s.rate > 0.0 else 'as fast as possible (rate 0)')
+        aim = (f'real-time factor {s.real_time_factor:g}' if s.rate > 0.0
+               else 'no real-time factor')
+        paused = ', paused' if self.paused else ''
         return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
-                f'{s.integrator} at {s.rate:g} Hz, time_step {s.time_step:g} s x {s.substeps} '
-                f'substeps (real-time factor {s.rate * s.time_step:g}); publishing every '
-                f'{s.publish_every} ticks ({s.rate / s.publish_every:g} Hz); topics under '
-                f'{self.get_fully_qualified_name()}/')
+                f'{s.integrator} {pace}, time_step {s.time_step:g} s x {s.substeps} '
+                f'substeps ({aim}); publishing every {s.publish_every} ticks; topics under '
+                f'{self.get_fully_qualified_name()}/{paused}')
 
     def tick(self):
-        """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish."""
+        """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish.
+
+        While paused, the inputs are applied and the outputs published, at the same time.
+        """
+        self._tick(advance=not self.paused)
+
+    def step(self):
+        """Advance ``step_ticks`` ticks whether paused or not, publishing each; their count."""
+        ticks = self.settings.step_ticks
+        self.outputs.refresh_listeners()
+        for _ in range(ticks):
+            self._tick(advance=True)
+        return ticks
+
+    def _tick(self, advance):
         started = time.perf_counter()
         self.inputs.apply(self.world, self.scene, self.settings)
-        if not self.paused:
+        if advance:
             self._advance()
         self.health.stats.add(time.perf_counter() - started)
         if self.settings.publish_clock:
@@ -140,7 +160,8 @@ class RigidSimNode(Node):
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
-        self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals)
+        self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals,
+                            self.loop.take_dropped())
 
     def reset(self):
         """Back to the scene's initial state at time 0, dropping held and stored inputs."""

@@ -40,13 +40,17 @@ class SimHarness:
     executor : rclpy.executors.Executor, spinning both nodes
     scene : str, scene file
     params : dict, further parameter overrides of the node
+    ticking : bool
+        Keep the node's own tick loop; by default it is stopped and the test advances the
+        node with :meth:`tick`.
     """
 
-    def __init__(self, context, executor, scene, params):
+    def __init__(self, context, executor, scene, params, ticking=False):
         overrides = [Parameter(name, value=value)
                      for name, value in dict(params, scene=scene).items()]
         self.sim = RigidSimNode(context=context, parameter_overrides=overrides)
-        self.sim.loop.stop()  # the test advances the node with tick()
+        if not ticking:
+            self.sim.loop.stop()
         self.probe = Node('probe', context=context)
         self.executor = executor
         executor.add_node(self.sim)
