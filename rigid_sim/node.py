@@ -20,6 +20,7 @@ from rigid_sim.control import SimControl
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.diagnostics_output import DiagnosticsOutput
+from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, QUEUE_DEPTH, StateOutputs
 from rigid_sim.resources import find_scene
@@ -68,6 +69,7 @@ class RigidSimNode(Node):
         self._pending = None       # validated parameter change awaiting the post-set callback
         self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame)
+        self.imu_outputs = ImuOutputs(self, self.scene, self.world, '')
         self.inputs = BodyInputs(self, self.scene)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
         self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
@@ -79,6 +81,7 @@ class RigidSimNode(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
+        self._warn_on_slow_ticks_for_imus()
 
     @property
     def paused(self):
@@ -89,6 +92,17 @@ class RigidSimNode(Node):
     def pending_inputs(self):
         """Number of received input messages the next tick will apply."""
         return self.inputs.pending
+
+    def _warn_on_slow_ticks_for_imus(self):
+        # An IMU reads at most once per tick: say so rather than read slower silently.
+        imus = self.imu_outputs.imus
+        tick_rate = 1.0 / self.settings.time_step
+        for index, spec in zip(imus.bodies, imus.specs) if imus is not None else ():
+            if spec.rate is not None and spec.rate > tick_rate * (1.0 + 1e-9):
+                self.get_logger().warning(
+                    f'the IMU of {self.scene.bodies[index].name!r} asks for {spec.rate:g} Hz '
+                    f'but a tick advances {self.settings.time_step:g} s: it reads once per '
+                    f'tick, {tick_rate:g} Hz of simulated time')
 
     def _warn_on_frame_mismatch(self):
         # The parameter names the frame of every message; a scene naming another one is
@@ -134,6 +148,7 @@ class RigidSimNode(Node):
         self.health.stats.add(time.perf_counter() - started)
         if self.settings.publish_clock:
             self._clock_publisher.publish(conversions.clock(self.world.time))
+        self.imu_outputs.publish(self.world)
         if self.ticks % self.settings.publish_every == 0:
             self.outputs.publish(self.world)
         self.ticks += 1
@@ -167,6 +182,7 @@ class RigidSimNode(Node):
         """Back to the scene's initial state at time 0, dropping held and stored inputs."""
         self.world.reset()   # drops held wrenches too
         self.inputs.clear()
+        self.imu_outputs.restart()
         self.health.restart(self.world.time)
 
     def _on_set_parameters(self, changes):
@@ -207,9 +223,11 @@ class RigidSimNode(Node):
             self.loop.set_rate(proposed.rate)
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
+        self._warn_on_slow_ticks_for_imus()
 
     def _wire_scene(self):
         """New bodies: new topics, messages, counters and diagnostics window."""
         self.outputs.wire(self.scene, self.settings.world_frame)
+        self.imu_outputs.wire(self.scene, self.world, '')
         self.inputs.wire(self.scene)
         self.health.restart(self.world.time)
