@@ -6,6 +6,7 @@ parameter declared as double. The type and range are then checked here, for star
 runtime values alike (at runtime rclpy checks the range of a double first, in its own words).
 """
 import math
+import re
 from dataclasses import dataclass, replace
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -41,6 +42,7 @@ class Settings:
     publish_clock: bool    # publish /clock
     start_paused: bool     # integration paused at start
     step_ticks: int        # ticks one ~/step call advances
+    frame_prefix: str      # prefixed to every body and point frame
 
     @property
     def publish_every(self):
@@ -67,6 +69,10 @@ class Spec:
     low: float = None  # inclusive bounds of a numeric parameter
     high: float = None
     above_low: bool = False  # True: the lower bound itself is refused (strictly positive)
+    # A text parameter must match this regular expression in full (None: any non-empty
+    # text); pattern_meaning says in words what it matches.
+    pattern: str = None
+    pattern_meaning: str = ''
 
 
 SPECS = {
@@ -92,6 +98,11 @@ SPECS = {
     'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
     'start_paused': Spec(bool, 'start with integration paused (read at start only)'),
     'step_ticks': Spec(int, 'ticks that one ~/step call advances', 1, MAX_STEP_TICKS),
+    'frame_prefix': Spec(str, 'prefixed to every body and point frame in messages and tf '
+                              '(e.g. sim1/), for several simulators on one graph',
+                         pattern=r'(?!/)(?!.*//)[A-Za-z0-9_/]*',
+                         pattern_meaning='letters, digits, _ and /, not starting with / and '
+                                         'without //'),
 }
 
 
@@ -124,8 +135,11 @@ def coerce(name, value):
             f'parameter {name!r}: expected a {spec.kind.__name__}, got {value!r}')
     if spec.low is not None:
         _check_range(name, spec, value)
-    if spec.kind is str and not value.strip():
+    if spec.kind is str and spec.pattern is None and not value.strip():
         raise ParameterError(f'parameter {name!r}: must not be empty')
+    if spec.pattern is not None and not re.fullmatch(spec.pattern, value):
+        raise ParameterError(f'parameter {name!r}: expected {spec.pattern_meaning}, '
+                             f'got {value!r}')
     return spec.kind(value)
 
 
@@ -160,7 +174,7 @@ def declare(node):
     defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
-                'step_ticks': 1}
+                'step_ticks': 1, 'frame_prefix': ''}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)
