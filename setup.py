@@ -57,5 +57,7 @@ setup(
             'rigid_sim_node = rigid_sim.main:main',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
         ],
+        # The test kit's fixtures for users' pytest suites (rigid_sim.testing).
+        'pytest11': ['rigid_sim = rigid_sim.testing.plugin'],
     },
 )

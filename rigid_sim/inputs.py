@@ -104,6 +104,11 @@ class BodyInputs:
             self._subscriptions.append(self._subscribe(kinds[topic], topic, index,
                                                        self._names[index]))
 
+    def topics(self):
+        """Fully qualified names of every input topic, subscribed to or awaited."""
+        return {subscription.topic_name for subscription in self._subscriptions} | set(
+            self._awaited)
+
     @property
     def pending(self):
         """Number of received messages the next tick will apply."""
