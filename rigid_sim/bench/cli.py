@@ -2,11 +2,12 @@
 import argparse
 import sys
 
-from rigid_sim.bench import (MissingPackage, accuracy, inertia_cost, node_rate, stability,
-                             throughput)
+from rigid_sim.bench import (MissingPackage, accuracy, imu_cost, inertia_cost, node_rate,
+                             stability, throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
+    ('imu', imu_cost, 'the cost of an IMU per published reading, and of none'),
     ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
     ('node', node_rate, 'the node at scale: real-time factor and tick time against N'),
     ('stability', stability, 'the hard cases through every integrator'),
