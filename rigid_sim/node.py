@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The rclpy node: parameters, a wall-clock timer, wrench inputs, state outputs, services.
 
 The node holds no physics: a :class:`~rigid_sim.core.world.World` does. Subscription
@@ -41,15 +43,18 @@ NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 
 
 def load(settings):
-    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError,
-    ParameterError when ``world_frame`` is a frame of the scene)."""
+    """Load the scene named by ``settings`` and build its world.
+
+    Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
+    the scene.
+    """
     scene = load_scene(find_scene(settings.scene))
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
 
 def check_frames(scene, settings):
-    """ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
+    """Raise ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
     try:
         check_world_frame(scene, settings.world_frame)
     except ValueError as error:
@@ -146,7 +151,7 @@ class RigidSimNode(Node):
 
     @property
     def pending_inputs(self):
-        """Number of received wrench messages the next tick will apply."""
+        """Return the number of received wrench messages the next tick will apply."""
         return len(self._inbox)
 
     def tick(self):

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Worlds built straight from the core, and references that do not use the core.
 
 The references are physics written out here in the tests' own terms: closed forms, and
@@ -32,9 +34,12 @@ def make_bodies(mass, inertia, com_in_body=None):
 
     Parameters
     ----------
-    mass : (N,) kg
-    inertia : (N, 3, 3) kg m^2, about the centre of mass, body axes
-    com_in_body : (N, 3) m, centre of mass in body-frame coordinates (zeros if None)
+    mass : (N,) float
+        kg.
+    inertia : (N, 3, 3) float
+        About the centre of mass, body axes, kg m^2.
+    com_in_body : (N, 3) float, optional
+        Centre of mass in body-frame coordinates, m (zeros if None).
     """
     mass = np.atleast_1d(np.asarray(mass, dtype=float))
     inertia = np.asarray(inertia, dtype=float).reshape(-1, 3, 3)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark problems, each paired with an exact oracle for its state at the final time.
 
 Every case is one body of mass 1 kg with principal moments diag(1, 2, 3) kg m^2, starting at
@@ -63,7 +65,7 @@ class Case:
     mujoco: bool          # MuJoCo can run it as a bare free body
 
     def build(self, integrator, tolerance=1e-6):
-        """A fresh World running this case with the named integrator."""
+        """Return a fresh World running this case with the named integrator."""
         bodies = RigidBodies(('body',), np.array([MASS]), np.diag(MOMENTS)[None],
                              np.zeros((1, 3)))
         start, velocity = SPRING_START if self.key == 'spring' else (np.zeros(3), np.zeros(3))
@@ -84,8 +86,10 @@ class Case:
         return []
 
     def energy(self, world):
-        """Energy this case tracks, J; for ``offset_force`` the conserved
-        ``H = M v^2 / 2 + omega.L / 2 - F.(x + R r)``."""
+        """Energy this case tracks, J.
+
+        For ``offset_force`` the conserved ``H = M v^2 / 2 + omega.L / 2 - F.(x + R r)``.
+        """
         if self.key != 'offset_force':
             return world.energy()
         snapshot = world.snapshot()
@@ -93,7 +97,7 @@ class Case:
         return float(snapshot.kinetic_energy()[0] - PUSH_FORCE @ point)
 
     def oracle(self):
-        """The exact final state (cached per process)."""
+        """Return the exact final state (cached per process)."""
         return _oracle(self)
 
 
@@ -114,7 +118,7 @@ class Result:
     cpu_time: float           # s, median of the repeats
 
     def error(self, kind):
-        """The error the plot uses for a case: 'orientation' or 'position'."""
+        """Return the error the plot uses for a case: 'orientation' or 'position'."""
         return getattr(self, kind + '_error')
 
 
