@@ -63,9 +63,12 @@ class StateMessages:
 
     Attributes
     ----------
-    poses, twists, odometry : lists of N PoseStamped, TwistStamped, Odometry (scene order)
-    pose_array : PoseArray of the same N Pose objects
-    markers : MarkerArray, one marker per body, sharing the same Pose objects
+    poses, twists, odometry : list of N PoseStamped, TwistStamped, Odometry
+        One per body, in scene order.
+    pose_array : PoseArray
+        The same N Pose objects.
+    markers : MarkerArray
+        One marker per body, sharing the same Pose objects.
     """
 
     def __init__(self, bodies, world_frame):

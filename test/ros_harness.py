@@ -21,7 +21,7 @@ from visualization_msgs.msg import MarkerArray
 from rigid_sim import conversions
 from rigid_sim.node import RigidSimNode
 
-TIMEOUT = 15.0  # s; first discovery between processes takes 0.3-3.7 s (docs/ros_notes.md)
+TIMEOUT = 15.0  # s; first discovery between processes can take seconds (docs/ros_notes.md)
 
 
 def spin_until(executor, condition, timeout=TIMEOUT, what='condition'):
@@ -39,9 +39,13 @@ class SimHarness:
     Parameters
     ----------
     context : rclpy.Context
-    executor : rclpy.executors.Executor, spinning both nodes
-    scene : str, scene file
-    params : dict, further parameter overrides of the node
+        The test's own context (discovery OFF).
+    executor : rclpy.executors.Executor
+        Spins both nodes.
+    scene : str
+        Scene file.
+    params : dict
+        Further parameter overrides of the node.
     """
 
     def __init__(self, context, executor, scene, params):

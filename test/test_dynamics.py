@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
+from physics_cases import TILT
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
@@ -14,7 +15,6 @@ from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION,
 
 GRAVITY = np.array([0.4, -0.3, -9.81])   # m/s^2, tilted so every axis is exercised
 ROUNDING = 1e-11                         # relative error left by float64 sums over ~1e3 steps
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])  # a generic initial orientation
 ASYMMETRIC_INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
 
 

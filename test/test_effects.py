@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
+from physics_cases import TILT
 import rigid_sim.core.effects
 from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
@@ -18,7 +19,6 @@ from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
 
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])
 INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
 COM = np.array([0.1, -0.05, 0.02])   # m, centre of mass in the body frame
 OMEGA = np.array([3.0, -2.0, 4.0])    # rad/s, world

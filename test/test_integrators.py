@@ -8,12 +8,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
+from physics_cases import TILT
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY, make_integrator
 from rigid_sim.core.state import ORIENTATION, POSITION
 
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])
 # A body on a spring from an off-centre point, under gravity: translation and rotation coupled.
 SPRUNG = cases.SingleBody(
     mass=1.2, inertia=TILT.as_matrix() @ np.diag([0.3, 0.5, 0.7]) @ TILT.as_matrix().T,

@@ -10,8 +10,9 @@ It runs in its own process so that the node under test, which only fills and sen
 that have subscribers, pays for publishing as it would to a real user, and so that receiving
 does not take CPU time from the node's thread. Messages arrive serialised (``raw=True``):
 counting needs no Python message objects, so the listener keeps up with what it is sent.
-The EventsExecutor's ``spin_once`` handles ~60k callbacks/s whatever the number of
-subscriptions, where the SingleThreadedExecutor manages ~625/s with 100 (docs/ros_notes.md).
+The EventsExecutor's ``spin_once`` keeps its callback rate whatever the number of
+subscriptions, where the SingleThreadedExecutor's falls with every subscription
+(docs/ros_notes.md).
 """
 import json
 import sys

@@ -34,7 +34,7 @@ from rigid_sim.node import RigidSimNode
 
 SECTION = 'rigid_sim_bench node'
 WRENCH_INPUT_LIMIT = 100   # from this N on, no wrench subscriptions (see the module text)
-MATCH_TIMEOUT = 30.0       # s; discovery takes 0.3-3.7 s, longer with thousands of endpoints
+MATCH_TIMEOUT = 30.0       # s; discovery takes seconds, more with thousands of endpoints
 STOP_TIMEOUT = 5.0         # s the listener gets to exit after SIGINT
 GOAL_RTF = 0.99            # a 1 kHz wall-clock timer cannot average above 1; see the report
 DURATION, WARMUP = 5.0, 1.0   # s of wall time
