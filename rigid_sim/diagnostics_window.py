@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """What the node reports on /diagnostics: one window of ticks, the world's health, a level.
 
 Kept apart from the node so that the node only wires topics and timers; nothing here talks
@@ -33,7 +35,7 @@ class TickStats:
         return self.step_total / max(self.ticks, 1)
 
     def real_time_factor(self, sim_time):
-        """Simulated seconds advanced per wall second since the window began."""
+        """Return the simulated seconds advanced per wall second since the window began."""
         return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
 
 

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The node's parameters: names, descriptors, defaults and the checks that refuse bad values.
 
 Every parameter is declared with ``dynamic_typing`` so that a numeric one accepts an integer
@@ -13,7 +15,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.resources import DEFAULT_SCENE
 
-MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (ROS_NOTES)
+MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (docs/ros_notes.md)
 # Parameters rclpy declares on every node; an override of these is not a misspelling.
 NODE_BUILTINS = ('use_sim_time', 'start_type_description_service', 'qos_overrides')
 
@@ -77,7 +79,7 @@ SPECS = {
 
 
 def descriptor(name):
-    """The ParameterDescriptor of parameter ``name``: description, type note and range."""
+    """Return the ParameterDescriptor of parameter ``name``: description, type note and range."""
     spec = SPECS[name]
     numeric = ' (integer literals accepted)' if spec.kind is float else ''
     result = ParameterDescriptor(
@@ -156,7 +158,7 @@ def declare(node):
 
 def _check_unknown_overrides(node):
     # rclpy keeps the overrides of --params-file and -p only in this attribute (also read
-    # by declare); without the check a misspelt name is silently ignored (ROS_NOTES).
+    # by declare); without the check a misspelt name is silently ignored (docs/ros_notes.md).
     unknown = sorted(set(node._parameter_overrides) - set(SPECS) - set(NODE_BUILTINS))
     unknown = [name for name in unknown if not name.startswith('qos_overrides.')]
     if unknown:
@@ -165,7 +167,9 @@ def _check_unknown_overrides(node):
 
 
 def updated(settings, changes):
-    """Settings with ``changes`` (rclpy Parameters) applied, or ParameterError saying why not.
+    """Return the settings with ``changes`` (rclpy Parameters) applied.
+
+    Raises ParameterError saying why a change is refused.
 
     Parameters that are not this node's own (``use_sim_time``) are passed over.
     """

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Parameters: declared defaults, integer literals, refusals at start and at runtime.
 
 A refused value at start raises ParameterError (the executable turns it into a message and
@@ -65,7 +67,7 @@ def test_clock_advances_by_time_step_per_tick(harness, write_scene):
 
 
 def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, write_scene):
-    """rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
+    """At rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
     sim = harness(write_scene(SCENE), rate=100.0, publish_rate=25.0, time_step=0.125)
     sim.tick(8)
     assert len(sim.received['/clock']) == 8
@@ -123,8 +125,10 @@ def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context
 
 
 def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_scene):
-    """ros2 param set with a bad value or a malformed scene: refused with the reason, and
-    the node keeps simulating its scene with its previous settings."""
+    """ros2 param set with a bad value or a malformed scene.
+
+    Refused with the reason, and the node keeps simulating its scene with its previous settings.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     before = sim.sim.settings
     rate, = sim.set_parameters(rate=-5.0)
@@ -145,8 +149,11 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
 
 
 def test_runtime_changes_take_effect(harness, write_scene):
-    """Accepted changes apply at once: rate (an integer literal) sets the timer period,
-    world_frame the stamps' frame, integrator the method, scene a new world at time 0."""
+    """Accepted changes apply at once.
+
+    ``rate`` (an integer literal) sets the timer period, ``world_frame`` the stamps' frame,
+    ``integrator`` the method, ``scene`` a new world at time 0.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     sim.tick(2)
     assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',

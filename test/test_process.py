@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The ``rigid_sim_node`` executable as its own process, talking over DDS.
 
 The environment comes from conftest.py (this run's ROS_DOMAIN_ID, discovery on localhost);
@@ -34,7 +36,7 @@ def start_node(*ros_arguments, cwd):
 
 @pytest.fixture
 def probe():
-    """A node in this test process, on this run's domain, with its executor."""
+    """Yield a node in this test process, on this run's domain, with its executor."""
     context = rclpy.Context()
     rclpy.init(context=context)
     node = Node('probe', context=context)
@@ -47,8 +49,11 @@ def probe():
 
 
 def test_node_process_publishes_poses_and_moves_under_a_wrench(probe, tmp_path):
-    """The packaged wrenches scene, found by bare name, runs; a 10 N world force along x
-    from another process accelerates the cart along x only (no gravity in that scene)."""
+    """The packaged wrenches scene, found by bare name, runs.
+
+    A 10 N world force along x from another process accelerates the cart along x only (no gravity
+    in that scene).
+    """
     node, executor = probe
     process = start_node('-p', 'scene:=wrenches.yaml', cwd=tmp_path)
     try:
