@@ -52,7 +52,7 @@ class SimHarness:
         overrides = [Parameter(name, value=value)
                      for name, value in dict(params, scene=scene).items()]
         self.sim = RigidSimNode(context=context, parameter_overrides=overrides)
-        self.sim.timer.cancel()  # the test advances the node with tick()
+        self.sim.loop.stop()  # the test advances the node with tick()
         self.probe = Node('probe', context=context)
         self.executor = executor
         executor.add_node(self.sim)

@@ -337,7 +337,7 @@ def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
     from ros_harness import spin_until
     sim = RigidSimNode(context=ros_context, parameter_overrides=[
         Parameter('scene', value=write_scene(SCENE)), Parameter('time_step', value=STEP)])
-    sim.timer.cancel()
+    sim.loop.stop()
     late = Node('late', context=ros_context)
     executor = SingleThreadedExecutor(context=ros_context)
     for node in (sim, late):

@@ -53,7 +53,7 @@ def test_integer_literals_accepted_and_time_step_defaults_to_one_over_rate(
     settings = node.settings
     assert (settings.rate, settings.wrench_timeout, settings.tolerance) == (50.0, 2.0, 1.0)
     assert settings.time_step == 1 / 50 and settings.publish_rate == 50.0
-    assert node.timer.timer_period_ns == 20_000_000
+    assert node.loop.timer.timer_period_ns == 20_000_000
     node.destroy_node()
 
 
@@ -158,7 +158,7 @@ def test_runtime_changes_take_effect(harness, write_scene):
     sim.tick(2)
     assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',
                                                         integrator='euler'))
-    assert sim.sim.timer.timer_period_ns == 50_000_000
+    assert sim.sim.loop.timer.timer_period_ns == 50_000_000
     assert sim.sim.world.integrator.name == 'euler'
     sim.tick(1)
     assert sim.latest('box/odom').header.frame_id == 'map'
