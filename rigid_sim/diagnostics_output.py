@@ -40,9 +40,13 @@ class DiagnosticsOutput:
         Parameters
         ----------
         world : rigid_sim.core.world.World
+            The world whose time, energy and safeguard counts are reported.
         settings : rigid_sim.parameters.Settings
+            The node's settings (integrator, rate, time step).
         paused : bool
+            Whether integration is paused.
         refusals : rigid_sim.inputs.Refusals
+            Refused inputs per body and the last reason.
         """
         values = {'simulated time [s]': world.time, 'paused': paused,
                   'integrator': settings.integrator,

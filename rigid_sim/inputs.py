@@ -19,7 +19,7 @@ WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
 
 
 def held_wrenches(world):
-    """The world's held wrenches (``hold``, ``release``, ``check``): the node's only way in."""
+    """Return the world's held wrenches (``hold``, ``release``, ``check``): the only way in."""
     return world.effect(AppliedWrenches)
 
 
@@ -68,7 +68,7 @@ class BodyInputs:
 
     @property
     def pending(self):
-        """Number of received messages the next tick will apply."""
+        """Return the number of received messages the next tick will apply."""
         return len(self._inbox)
 
     def clear(self):
@@ -81,8 +81,11 @@ class BodyInputs:
         Parameters
         ----------
         world : rigid_sim.core.world.World
-        scene : rigid_sim.core.scene.Scene, the world's scene (frames and points)
-        settings : rigid_sim.parameters.Settings (``world_frame``, ``wrench_timeout``)
+            The world that holds the wrenches.
+        scene : rigid_sim.core.scene.Scene
+            The world's scene (frames and points).
+        settings : rigid_sim.parameters.Settings
+            ``world_frame`` and ``wrench_timeout`` are read.
         """
         inbox, self._inbox = self._inbox, []
         if not inbox:

@@ -79,12 +79,12 @@ class RigidSimNode(Node):
 
     @property
     def paused(self):
-        """True while integration is paused."""
+        """Return whether integration is paused."""
         return self.control.paused
 
     @property
     def pending_inputs(self):
-        """Number of received input messages the next tick will apply."""
+        """Return the number of received input messages the next tick will apply."""
         return self.inputs.pending
 
     def _warn_on_frame_mismatch(self):
@@ -188,7 +188,7 @@ class RigidSimNode(Node):
         self._warn_on_frame_mismatch()
 
     def _wire_scene(self):
-        """New bodies: new topics, messages, counters and diagnostics window."""
+        """Wire the current scene: new topics, messages, counters and diagnostics window."""
         self.outputs.wire(self.scene, self.settings.world_frame)
         self.inputs.wire(self.scene)
         self.health.restart(self.world.time)
