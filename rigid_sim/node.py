@@ -30,15 +30,18 @@ NODE_NAME = 'rigid_sim'
 
 
 def load(settings):
-    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError,
-    ParameterError when ``world_frame`` is a frame of the scene)."""
+    """Load the scene named by ``settings`` and build its world.
+
+    Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
+    the scene.
+    """
     scene = load_scene(find_scene(settings.scene))
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
 
 def check_frames(scene, settings):
-    """ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
+    """Raise ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
     try:
         check_world_frame(scene, settings.world_frame)
     except ValueError as error:
