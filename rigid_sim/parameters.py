@@ -8,14 +8,29 @@ parameter declared as double. The type and range are then checked here, for star
 runtime values alike (at runtime rclpy checks the range of a double first, in its own words).
 """
 import math
+import re
 from dataclasses import dataclass, replace
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
+from rigid_sim.core.text import shown
 from rigid_sim.resources import DEFAULT_SCENE
 
 MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (docs/ros_notes.md)
+# Hz; one tick at least every 1000 s keeps the timer period and the diagnostics meaningful.
+MIN_RATE = 1e-3
+# s; a ROS stamp counts nanoseconds, so a shorter step would not advance /clock at all.
+MIN_TIME_STEP = 1e-9
+# Integrator steps per tick: a tick's work grows with them, and above this one tick of one
+# body takes longer than the fastest tick period (the World's own splitting is bounded apart).
+MAX_SUBSTEPS = 1000
+# Below float64 round-off an adaptive integrator can only shrink its steps forever.
+MIN_TOLERANCE = 1e-12
+MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
+# A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
+FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
+MAX_FRAME_NAME = 100
 # Parameters rclpy declares on every node; an override of these is not a misspelling.
 NODE_BUILTINS = ('use_sim_time', 'start_type_description_service', 'qos_overrides')
 
@@ -53,27 +68,26 @@ class Spec:
     description: str
     low: float = None  # inclusive bounds of a numeric parameter
     high: float = None
-    above_low: bool = False  # True: the lower bound itself is refused (strictly positive)
 
 
 SPECS = {
     'scene': Spec(str, 'scene YAML file; a bare name is looked up in the working directory, '
                        'then in share/rigid_sim/config and its scenes/'),
-    'rate': Spec(float, 'ticks per second of wall time, Hz', 0.0, MAX_RATE, above_low=True),
+    'rate': Spec(float, 'ticks per second of wall time, Hz', MIN_RATE, MAX_RATE),
     'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start; a later '
                              'change of rate keeps it); time_step x rate is the real-time '
-                             'factor', 0.0, 10.0,
-                      above_low=True),
-    'substeps': Spec(int, 'integrator steps per tick', 1, 10000),
+                             'factor', MIN_TIME_STEP, 10.0),
+    'substeps': Spec(int, 'integrator steps per tick', 1, MAX_SUBSTEPS),
     'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
                                 'and markers go out (default rate at start): every '
                                 'round(rate / publish_rate)-th tick, at most once per tick',
-                         0.0, MAX_RATE, above_low=True),
+                         MIN_RATE, MAX_RATE),
     'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
-    'tolerance': Spec(float, 'error target of adaptive integrators', 0.0, 1.0, above_low=True),
+    'tolerance': Spec(float, 'error target of adaptive integrators', MIN_TOLERANCE, 1.0),
     'wrench_timeout': Spec(float, 'seconds of simulated time a wrench is held after its '
                                   'message; 0 holds it until replaced', 0.0, 1.0e9),
-    'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses'),
+    'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses: name '
+                             'tokens (letters, digits, _) joined by /'),
     'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
 }
 
@@ -99,31 +113,43 @@ def coerce(name, value):
     # bool is an int in Python; a flag given for a number is a mistake, not 1 or 0.
     if spec.kind in (int, float) and (isinstance(value, bool) or
                                       not isinstance(value, (int, float))):
-        raise ParameterError(f'parameter {name!r}: expected a number, got {value!r}')
+        raise ParameterError(f'parameter {name!r}: expected a number, got {shown(value)}')
     if spec.kind is int and not isinstance(value, int):
-        raise ParameterError(f'parameter {name!r}: expected an integer, got {value!r}')
+        raise ParameterError(f'parameter {name!r}: expected an integer, got {shown(value)}')
     if spec.kind in (str, bool) and not isinstance(value, spec.kind):
         raise ParameterError(
-            f'parameter {name!r}: expected a {spec.kind.__name__}, got {value!r}')
+            f'parameter {name!r}: expected a {spec.kind.__name__}, got {shown(value)}')
     if spec.low is not None:
         _check_range(name, spec, value)
-    if spec.kind is str and not value.strip():
-        raise ParameterError(f'parameter {name!r}: must not be empty')
+    if spec.kind is str:
+        _check_text(name, value)
     return spec.kind(value)
 
 
 def _check_range(name, spec, value):
-    too_low = value <= spec.low if spec.above_low else value < spec.low
-    if not math.isfinite(value) or too_low or value > spec.high:
-        low = '(' if spec.above_low else '['
+    if not (math.isfinite(value) and spec.low <= value <= spec.high):
         raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
-                             f'{low}{spec.low}, {spec.high}]')
+                             f'[{spec.low:g}, {spec.high:g}]')
+
+
+def _check_text(name, value):
+    if not value.strip():
+        raise ParameterError(f'parameter {name!r}: must not be empty')
+    if name == 'world_frame' and not (len(value) <= MAX_FRAME_NAME
+                                      and FRAME_NAME.match(value)):
+        raise ParameterError(f'parameter {name!r}: {shown(value)} is no frame name: name '
+                             'tokens (letters, digits and _, not starting with a digit) '
+                             f'joined by /, at most {MAX_FRAME_NAME} characters')
+    if name == 'scene' and (len(value) > MAX_PATH or '\0' in value):
+        raise ParameterError(f'parameter {name!r}: {shown(value)} is no file path (at most '
+                             f'{MAX_PATH} characters, no NUL)')
 
 
 def _check_integrator(name):
     if name not in REGISTRY:
         raise ParameterError(
-            f'parameter \'integrator\': unknown integrator {name!r}; valid: {sorted(REGISTRY)}')
+            f"parameter 'integrator': unknown integrator {shown(name)}; "
+            f'valid: {sorted(REGISTRY)}')
 
 
 def declare(node):
@@ -162,7 +188,7 @@ def _check_unknown_overrides(node):
     unknown = sorted(set(node._parameter_overrides) - set(SPECS) - set(NODE_BUILTINS))
     unknown = [name for name in unknown if not name.startswith('qos_overrides.')]
     if unknown:
-        raise ParameterError(f'unknown parameter(s) {unknown}; '
+        raise ParameterError(f'unknown parameter(s) {shown(unknown)}; '
                              f'this node has {sorted(SPECS)}')
 
 

@@ -148,6 +148,41 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
 
 
+# (name, value, reason): values a runtime change used to get through.
+HOSTILE = [
+    ('world_frame', 'bad frame!', 'no frame name'), ('world_frame', 'w' * 100_000, 'no frame'),
+    ('time_step', 1e-300, 'outside the range'), ('substeps', 10_000, 'outside the range'),
+    ('rate', 1e-300, 'outside the range'), ('publish_rate', 1e-300, 'outside the range'),
+    ('tolerance', 1e-300, 'outside the range'), ('scene', 's' * 100_000, 'no file path'),
+    ('scene', 'a\0b', 'no file path'), ('integrator', 'x' * 100_000, 'unknown integrator')]
+
+
+@pytest.mark.parametrize('name, value, reason', HOSTILE,
+                         ids=[f'{n}-{str(v)[:12]}'
+                              for n, v, _ in HOSTILE])
+def test_hostile_value_is_refused_at_start_with_a_short_reason(
+        ros_context, write_scene, name, value, reason):
+    """Bounds hold at start as at runtime, and a huge value is quoted by its ends only."""
+    overrides = [Parameter('scene', value=write_scene(SCENE)), Parameter(name, value=value)]
+    with pytest.raises(ParameterError, match=f"parameter '{name}'.*{reason}") as refusal:
+        RigidSimNode(context=ros_context, parameter_overrides=overrides)
+    assert len(str(refusal.value)) < 1000
+
+
+def test_hostile_runtime_values_are_refused_and_the_clock_keeps_advancing(harness, write_scene):
+    """Each is refused with its reason, quoted short, and the node runs on unchanged."""
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    before = sim.sim.settings
+    for name, value, reason in HOSTILE:
+        result, = sim.set_parameters(**{name: value})
+        assert not result.successful, name
+        assert len(result.reason) < 1000 and (reason in result.reason or 'range' in
+                                              result.reason), result.reason
+    assert sim.sim.settings == before
+    sim.tick(8)
+    assert clock_nanoseconds(sim)[-1] == 1_000_000_000
+
+
 def test_runtime_changes_take_effect(harness, write_scene):
     """Accepted changes apply at once.
 

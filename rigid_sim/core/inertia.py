@@ -17,6 +17,9 @@ from scipy.stats import qmc
 import trimesh
 from trimesh.ray import ray_util
 
+from rigid_sim.core.scene_file import check_file, FileRefused
+from rigid_sim.core.text import clipped
+
 # Relative asymmetry |I - I^T| / max|I| above this is a typing mistake, not round-off.
 SYMMETRY_RTOL = 1e-6
 # Principal-moment triangle inequality slack, relative to the trace: a flat plate has
@@ -130,7 +133,7 @@ def load_mesh(path, scale=1.0):
     Parameters
     ----------
     path : str
-        Mesh file.
+        Mesh file: a regular file (a FIFO or device is refused before it is opened).
     scale : float or (3,) float
         Uniform or per-axis scale, > 0.
 
@@ -139,8 +142,12 @@ def load_mesh(path, scale=1.0):
     mesh : trimesh.Trimesh
         Vertices merged (so an STL can be watertight); closure is checked where it is used.
     """
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f'mesh file not found: {path}')
+    if not os.path.lexists(path):
+        raise FileNotFoundError(f'mesh file not found: {clipped(path)}')
+    try:
+        check_file(path, math.inf, f'mesh file {clipped(path)}')
+    except FileRefused as refused:
+        raise ValueError(refused.reason) from None
     scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,))
     for factor in scale:
         _positive(factor, 'mesh scale')
@@ -150,10 +157,10 @@ def load_mesh(path, scale=1.0):
     except Exception as error:
         # trimesh's readers raise whatever a malformed file trips (IndexError for a short
         # OBJ vertex, KeyError for a PLY without y, ...): refuse the file by name instead.
-        raise ValueError(f'cannot read mesh file {path}: {type(error).__name__}: {error}') \
-            from None
+        raise ValueError(f'cannot read mesh file {clipped(path)}: {type(error).__name__}: '
+                         f'{clipped(error)}') from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError(f'no triangles in mesh file {path}')
+        raise ValueError(f'no triangles in mesh file {clipped(path)}')
     mesh.apply_transform(np.diag(np.append(scale, 1.0)))
     return mesh
 
@@ -317,7 +324,8 @@ def given(mass, center_of_mass=(0.0, 0.0, 0.0), diagonal=None, matrix=None):
     return MassProperties(_positive(mass, 'mass'), center_of_mass, check_inertia(matrix))
 
 
-def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_dir='.'):
+def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_dir='.',
+                          mesh=None):
     """Mass properties of a scene body from its shape and inertia method.
 
     Parameters
@@ -334,9 +342,11 @@ def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_d
         Exactly one: kg, or kg/m^3.
     base_dir : str
         Directory a mesh ``file`` is relative to (the scene file's).
+    mesh : trimesh.Trimesh, optional
+        The mesh of a mesh shape, already loaded (and scaled); it is not modified.
     """
-    solid = shape
-    if shape.get('type') == 'mesh':
+    solid = shape if mesh is None else mesh
+    if shape.get('type') == 'mesh' and mesh is None:
         solid = load_mesh(os.path.join(base_dir, shape['file']), shape.get('scale', 1.0))
     exact = mesh_exact if isinstance(solid, trimesh.Trimesh) else _primitive
     has_given = 'diagonal' in inertia_method or 'matrix' in inertia_method

@@ -18,6 +18,7 @@ two rotations whatever the number of wrenches.
 """
 import heapq
 import itertools
+import math
 from collections import Counter
 from dataclasses import dataclass
 
@@ -81,12 +82,14 @@ class AppliedWrenches:
         torque = np.asarray(torque, dtype=float).reshape(3)
         if not (np.all(np.isfinite(force)) and np.all(np.isfinite(torque))):
             raise ValueError(f'non-finite wrench: force {force}, torque {torque}')
-        if np.linalg.norm(force) > self.max_force:
-            raise ValueError(f'|force| {np.linalg.norm(force):.3g} N above the scene limit '
-                             f'max_force {self.max_force:.3g} N')
-        if np.linalg.norm(torque) > self.max_torque:
-            raise ValueError(f'|torque| {np.linalg.norm(torque):.3g} N m above the scene limit '
-                             f'max_torque {self.max_torque:.3g} N m')
+        # hypot: a 1e300 N component overflows no square; repr: 20.0001 is not shown as 20.
+        magnitude, moment = math.hypot(*force), math.hypot(*torque)
+        if magnitude > self.max_force:
+            raise ValueError(f'|force| {magnitude!r} N above the scene limit '
+                             f'max_force {self.max_force!r} N')
+        if moment > self.max_torque:
+            raise ValueError(f'|torque| {moment!r} N m above the scene limit '
+                             f'max_torque {self.max_torque!r} N m')
         return force, torque
 
     def hold(self, body, key, frame, force, torque=(0.0, 0.0, 0.0), point=None,
