@@ -14,6 +14,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rigid_sim.core import rotation
@@ -163,6 +164,35 @@ def marker(index, body, pose):
         scale = np.broadcast_to(shape['scale'], 3)
     result.scale.x, result.scale.y, result.scale.z = (float(s) for s in scale)
     return result
+
+
+def imu_message(frame_id, spec):
+    """A sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
+
+    The angular velocity and linear acceleration covariances are diagonal: the variance of
+    one reading's white noise (the bias is not white; it is what an estimator tracks). The
+    orientation is exact: its covariance is zero, as for noise-free readings; sensor_msgs
+    reads an all-zero covariance as "unknown".
+    """
+    message = Imu()
+    message.header.frame_id = frame_id
+    for covariance, noise in ((message.angular_velocity_covariance, spec.gyro),
+                              (message.linear_acceleration_covariance, spec.accel)):
+        covariance[[0, 4, 8]] = 0.0 if noise is None else noise.variance
+    return message
+
+
+def fill_imu(message, readings, row):
+    """Write row ``row`` of ``readings`` (rigid_sim.core.imu.Readings) into ``message``."""
+    to_time(readings.time, message.header.stamp)
+    q = message.orientation
+    q.x, q.y, q.z, q.w = readings.orientation[row].tolist()
+    _set_vector(message.angular_velocity, readings.angular_velocity[row])
+    _set_vector(message.linear_acceleration, readings.specific_force[row])
+
+
+def _set_vector(vector, values):
+    vector.x, vector.y, vector.z = values.tolist()
 
 
 def diagnostics(name, stamp_seconds, level, summary, values):

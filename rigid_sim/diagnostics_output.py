@@ -34,7 +34,7 @@ class DiagnosticsOutput:
         """Start a new window at ``sim_time`` (after a reset or a new scene)."""
         self.stats = TickStats(sim_time)
 
-    def publish(self, world, settings, paused, refusals):
+    def publish(self, world, settings, paused, refusals, dropped):
         """Publish the window's status and start a new window.
 
         Parameters
@@ -47,12 +47,19 @@ class DiagnosticsOutput:
             Whether integration is paused.
         refusals : rigid_sim.inputs.Refusals
             Refused inputs per body and the last reason.
+        dropped : int
+            Ticks given up behind wall time in the window.
         """
+        target = settings.real_time_factor
         values = {'simulated time [s]': world.time, 'paused': paused,
                   'integrator': settings.integrator,
-                  **window_values(self.stats, world, settings.rate * settings.time_step),
+                  **window_values(self.stats, world,
+                                  'none (rate 0: as fast as possible)' if target is None
+                                  else target),
+                  'ticks dropped behind wall time': dropped,
                   **refusal_values(refusals.counts, refusals.last)}
-        level, summary = health(self.stats, 1.0 / settings.rate)
+        period = 1.0 / settings.rate if settings.rate > 0.0 else None
+        level, summary = health(self.stats, period, dropped)
         self._publisher.publish(conversions.diagnostics(
             f'{self._node.get_name()}: physics', world.time, level, summary, values))
         self.restart(world.time)

@@ -20,6 +20,7 @@ from rigid_sim.control import SimControl
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.diagnostics_output import DiagnosticsOutput
+from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, QUEUE_DEPTH, StateOutputs
 from rigid_sim.resources import find_scene
@@ -71,14 +72,19 @@ class RigidSimNode(Node):
         self._pending = None       # validated parameter change awaiting the post-set callback
         self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame)
+        self.imu_outputs = ImuOutputs(self, self.scene, self.world, '')
         self.inputs = BodyInputs(self, self.scene)
-        self.control = SimControl(self, self.reset, lambda: self.world.time)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
+        self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
+                                  step=self.step, now=lambda: self.world.time,
+                                  paused_changed=self.loop.set_paused)
+        self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
+        self._warn_on_slow_ticks_for_imus()
 
     @property
     def paused(self):
@@ -89,6 +95,17 @@ class RigidSimNode(Node):
     def pending_inputs(self):
         """Return the number of received input messages the next tick will apply."""
         return self.inputs.pending
+
+    def _warn_on_slow_ticks_for_imus(self):
+        # An IMU reads at most once per tick: say so rather than read slower silently.
+        imus = self.imu_outputs.imus
+        tick_rate = 1.0 / self.settings.time_step
+        for index, spec in zip(imus.bodies, imus.specs) if imus is not None else ():
+            if spec.rate is not None and spec.rate > tick_rate * (1.0 + 1e-9):
+                self.get_logger().warning(
+                    f'the IMU of {self.scene.bodies[index].name!r} asks for {spec.rate:g} Hz '
+                    f'but a tick advances {self.settings.time_step:g} s: it reads once per '
+                    f'tick, {tick_rate:g} Hz of simulated time')
 
     def _warn_on_frame_mismatch(self):
         # The parameter names the frame of every message; a scene naming another one is
@@ -102,21 +119,39 @@ class RigidSimNode(Node):
 
     def _describe(self):
         s = self.settings
+        pace = (f'at {s.rate:g} Hz' if s.rate > 0.0 else 'as fast as possible (rate 0)')
+        aim = (f'real-time factor {s.real_time_factor:g}' if s.rate > 0.0
+               else 'no real-time factor')
+        paused = ', paused' if self.paused else ''
         return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
-                f'{s.integrator} at {s.rate:g} Hz, time_step {s.time_step:g} s x {s.substeps} '
-                f'substeps (real-time factor {s.rate * s.time_step:g}); publishing every '
-                f'{s.publish_every} ticks ({s.rate / s.publish_every:g} Hz); topics under '
-                f'{self.get_fully_qualified_name()}/')
+                f'{s.integrator} {pace}, time_step {s.time_step:g} s x {s.substeps} '
+                f'substeps ({aim}); publishing every {s.publish_every} ticks; topics under '
+                f'{self.get_fully_qualified_name()}/{paused}')
 
     def tick(self):
-        """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish."""
+        """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish.
+
+        While paused, the inputs are applied and the outputs published, at the same time.
+        """
+        self._tick(advance=not self.paused)
+
+    def step(self):
+        """Advance ``step_ticks`` ticks whether paused or not, publishing each; their count."""
+        ticks = self.settings.step_ticks
+        self.outputs.refresh_listeners()
+        for _ in range(ticks):
+            self._tick(advance=True)
+        return ticks
+
+    def _tick(self, advance):
         started = time.perf_counter()
         self.inputs.apply(self.world, self.scene, self.settings)
-        if not self.paused:
+        if advance:
             self._advance()
         self.health.stats.add(time.perf_counter() - started)
         if self.settings.publish_clock:
             self._clock_publisher.publish(conversions.clock(self.world.time))
+        self.imu_outputs.publish(self.world)
         if self.ticks % self.settings.publish_every == 0:
             self.outputs.publish(self.world)
         self.ticks += 1
@@ -143,12 +178,14 @@ class RigidSimNode(Node):
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
-        self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals)
+        self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals,
+                            self.loop.take_dropped())
 
     def reset(self):
         """Back to the scene's initial state at time 0, dropping held and stored inputs."""
         self.world.reset()   # drops held wrenches too
         self.inputs.clear()
+        self.imu_outputs.restart()
         self.health.restart(self.world.time)
 
     def _on_set_parameters(self, changes):
@@ -189,9 +226,11 @@ class RigidSimNode(Node):
             self.loop.set_rate(proposed.rate)
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
+        self._warn_on_slow_ticks_for_imus()
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""
         self.outputs.wire(self.scene, self.settings.world_frame)
+        self.imu_outputs.wire(self.scene, self.world, '')
         self.inputs.wire(self.scene)
         self.health.restart(self.world.time)

@@ -68,6 +68,10 @@ class StateOutputs:
         """Rebuild the reused messages of ``scene`` for a new ``world_frame``."""
         self._messages = conversions.StateMessages(scene.bodies, world_frame)
 
+    def refresh_listeners(self):
+        """Ask who listens at the next publication (lockstep clients want every tick)."""
+        self._listeners_due = -math.inf
+
     def publish(self, world):
         """Fill and send every output of ``world``'s current state that has subscribers."""
         now = time.monotonic()

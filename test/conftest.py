@@ -51,7 +51,8 @@ def write_scene(tmp_path):
 def harness(ros_context):
     """Start a rigid_sim node and a probe node in one executor.
 
-    The node's wall-clock timer is cancelled: the test advances it with ``tick()``.
+    The node's tick loop is stopped: the test advances it with ``tick()``, unless it asks
+    for ``harness(scene, ticking=True, **params)``.
     """
     from rclpy.executors import SingleThreadedExecutor
 
@@ -59,8 +60,8 @@ def harness(ros_context):
     executor = SingleThreadedExecutor(context=ros_context)
     made = []
 
-    def start(scene, **params):
-        made.append(SimHarness(ros_context, executor, scene, params))
+    def start(scene, ticking=False, **params):
+        made.append(SimHarness(ros_context, executor, scene, params, ticking))
         return made[-1]
     yield start
     for sim in made:

@@ -19,6 +19,7 @@ from rigid_sim.core.effects.applied_wrench import (
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
+from rigid_sim.core.imu import parse_imu
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -56,6 +57,7 @@ class BodySpec:
     angular_velocity: np.ndarray      # (3,) rad/s
     points: dict                      # name -> (3,) m, body-frame coordinates
     wrench_input: bool                # False: the body takes no applied wrenches
+    imu: object = None                # rigid_sim.core.imu.ImuSpec, or None: no IMU
 
 
 @dataclass(frozen=True)
@@ -91,7 +93,8 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
         'pose': (table({'position': (vector, ZERO),
                         'orientation': (quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
         'twist': (table({'linear': (vector, ZERO), 'angular': (vector, ZERO)}), {}),
-        'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True)}
+        'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True),
+        'imu': (raw, ABSENT)}
 SPRING = {'body': (token, REQUIRED), 'stiffness': (non_negative, REQUIRED),
           'point': (vector, ZERO), 'anchor': (vector, ABSENT), 'other': (token, ABSENT),
           'other_point': (vector, ABSENT), 'damping': (non_negative, 0.0),
@@ -182,7 +185,8 @@ def _body(value, key, budget):
         name=body['name'], shape=shape, mass_properties=properties,
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
         linear_velocity=body['twist']['linear'], angular_velocity=body['twist']['angular'],
-        points=body['points'], wrench_input=body['wrench_input'])
+        points=body['points'], wrench_input=body['wrench_input'],
+        imu=parse_imu(body['imu'], f'{key}.imu', body['points']) if 'imu' in body else None)
 
 
 def _bodies(entries, world_frame, budget):
