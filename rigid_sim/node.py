@@ -19,7 +19,6 @@ from std_srvs.srv import SetBool, Trigger
 from visualization_msgs.msg import MarkerArray
 
 from rigid_sim import conversions, parameters
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene, wrench_target
 from rigid_sim.diagnostics_window import TickStats, health, refusal_values, window_values
@@ -181,7 +180,7 @@ class RigidSimNode(Node):
     def _apply_inputs(self):
         """Hold every stored wrench in arrival order; a refused one changes nothing."""
         inbox, self._inbox = self._inbox, []
-        applied = self.world.effect(AppliedWrenches)
+        applied = self.world.inputs
         timeout = self.settings.wrench_timeout
         expires = self.world.time + timeout if timeout > 0.0 else math.inf
         for index, message in inbox:
