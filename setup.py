@@ -31,7 +31,7 @@ setup(
     ] + config_files(),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
-    install_requires=['setuptools', 'numpy', 'scipy', 'PyYAML', 'trimesh', 'rtree'],
+    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the

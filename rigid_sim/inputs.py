@@ -18,7 +18,6 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.core.body_state import with_pose, with_twist
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.scene import wrench_target
 
 QUEUE_DEPTH = 10
@@ -29,7 +28,7 @@ STATE_TOPICS = (('set_pose', PoseStamped), ('set_twist', TwistStamped))
 
 def held_wrenches(world):
     """Return the world's held wrenches (``hold``, ``release``, ``check``): the only way in."""
-    return world.effect(AppliedWrenches)
+    return world.inputs
 
 
 class Refusals:

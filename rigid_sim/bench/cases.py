@@ -23,7 +23,7 @@ import numpy as np
 
 from rigid_sim.bench import oracles
 from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.safeguards import UNIT_QUATERNION_SLACK
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -71,19 +71,21 @@ class Case:
         start, velocity = SPRING_START if self.key == 'spring' else (np.zeros(3), np.zeros(3))
         y0 = initial_state(bodies, [start], [IDENTITY], [velocity], [self.omega0])
         # The bare method: the benchmark measures each integrator, not the safeguards.
-        return World(bodies, y0, self._effects(bodies), integrator=integrator,
-                     tolerance=tolerance, auto_substep=False)
+        effects, inputs = self._effects_and_inputs(bodies)
+        return World(bodies, y0, effects, integrator=integrator, tolerance=tolerance,
+                     auto_substep=False, inputs=inputs)
 
-    def _effects(self, bodies):
+    def _effects_and_inputs(self, bodies):
+        """The case's effects and its held wrenches (None: no input)."""
         if self.key == 'spring':
             spec = SpringSpec(body=0, point=np.zeros(3), stiffness=SPRING_STIFFNESS,
                               damping=SPRING_DAMPING, anchor=np.zeros(3))
-            return [Springs(bodies, [spec])]
+            return [Springs(bodies, [spec])], None
         if self.key == 'offset_force':
             push = AppliedWrenches(bodies)
             push.hold(0, 'push', 'world_point', PUSH_FORCE, point=PUSH_POINT)
-            return [push]
-        return []
+            return [], push
+        return [], None
 
     def energy(self, world):
         """Energy this case tracks, J.

@@ -5,13 +5,14 @@ import argparse
 import sys
 
 from rigid_sim.bench import (MissingPackage, accuracy, inertia_cost, node_rate, stability,
-                             throughput)
+                             startup, throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
     ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
     ('node', node_rate, 'the node at scale: real-time factor and tick time against N'),
     ('stability', stability, 'the hard cases through every integrator'),
+    ('startup', startup, 'process start to the first step, with and without compiled kernels'),
     ('throughput', throughput, 'CPU time per body-step against the number of bodies'),
 )
 
