@@ -58,7 +58,8 @@ def report(results):
     """The Markdown section: setup and one row per integrator."""
     rows = [[name, f'{cold[0]:.2f}', f'{cold[1]:.2f}', f'{cached[0]:.2f}', f'{cached[1]:.2f}']
             for name, (cold, cached) in results.items()]
-    return '\n'.join(['### Setup', *bench.machine_description(),
+    machine = [line for line in bench.machine_description() if 'CPU time' not in line]
+    return '\n'.join(['### Setup', *machine,
                       f'- Command: `{bench.command_line()}`',
                       '- Wall time of a fresh process: import, default scene, warm-up, one step',
                       '', '### Start-up [s] (median of the repeats)',

@@ -22,7 +22,7 @@ from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
-from rigid_sim.core.integrators import REGISTRY
+from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
@@ -196,8 +196,9 @@ def ratio_table(results, sizes):
         return 'MuJoCo is not installed: no ratios.'
     reference = results['mujoco RK4']
     names = [name for name, cls in sorted(REGISTRY.items()) if cls.order >= 4]
+    names += [DEFAULT_INTEGRATOR, 'semi_implicit_euler'] + list(GUARDED)
     rows = [[name] + [f'{reference[n] / results[name][n]:.3g}' for n in sizes]
-            for name in names + ['semi_implicit_euler']]
+            for name in names if name in results]
     return bench.markdown_table(['MuJoCo RK4 / method'] + [f'N = {n:g}' for n in sizes], rows)
 
 

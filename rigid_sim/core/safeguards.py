@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core import kinematics
+from rigid_sim.core.dispatch import CompiledCall
 
 # Relative energy error the node's default integrator promises on every hard case.
 ENERGY_RTOL = 1e-3
@@ -115,6 +116,7 @@ class StepGuard:
             self._always_torqued |= effect.torqued
         self._may_torque = bool(self._always_torqued.any() or inputs.torqued.any())
         self._last_spin = (None, None, 0.0)   # (state, inputs version, their largest |omega|)
+        self._largest_spin = CompiledCall(kinematics.largest_spin)
 
     def plan(self, integrator, y, dt, current=1):
         """Substeps (int) and the reason ('' for one) for a step of ``dt`` from ``y``.
@@ -153,7 +155,7 @@ class StepGuard:
         last_y, last_version, last_rate = self._last_spin
         if y is last_y and version == last_version:
             return last_rate
-        rate = kinematics.largest_spin(y, self._inertia_inv, self._always_torqued,
-                                       self._inputs.held_mask, bound.rotation_all)
+        rate = self._largest_spin(y, self._inertia_inv, self._always_torqued,
+                                  self._inputs.held_mask, bound.rotation_all)
         self._last_spin = (y, version, rate)
         return rate

@@ -5,6 +5,8 @@ changes while stepping (``bodies.model`` and the effects' parameter arrays), the
 ``y`` (N, 13) that every step replaces, and the inputs (``inputs``: held wrenches, with their
 hold ends). The integrator's kernel is compiled for exactly the listed effects.
 """
+import sys
+
 import numpy as np
 
 from rigid_sim.core import safeguards
@@ -60,6 +62,7 @@ class World:
     @y.setter
     def y(self, state):
         self._y = np.ascontiguousarray(state, dtype=float)
+        self._spare = None
 
     def effect(self, kind):
         """The effect of class ``kind`` in this world, or None when the scene has none."""
@@ -118,7 +121,7 @@ class World:
         if y is None:
             diagnostics.failed_steps += 1
             return False
-        self._y = y
+        self._spare, self._y = self._y, y
         self.time += dt
         return True
 
@@ -131,10 +134,10 @@ class World:
         """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
         for halving in range(safeguards.MAX_HALVINGS + 1):
             pieces = substeps << halving
-            y = self._y.copy()
+            y = self._scratch()
+            y[...] = self._y
             try:
-                with np.errstate(all='ignore'):   # a non-finite result is handled, not warned
-                    code = self.integrator.advance(y, self.time, dt, pieces)
+                code = self.integrator.advance(y, self.time, dt, pieces)
                 failure = safeguards.failure_message(code, pieces, dt / pieces) if code else ''
             except ArithmeticError as error:   # dopri5 raises when its step size collapses
                 failure = f'{type(error).__name__}: {error}'
@@ -143,6 +146,16 @@ class World:
             self.diagnostics.rejected_steps += 1
             self.diagnostics.last_failure = f't = {self.time:.6g} s: {failure}'
         return None
+
+    def _scratch(self):
+        """An (N, 13) array to step into: the state the last step replaced, when no one else
+        holds it (a fresh array at large N costs page faults), else a new one."""
+        spare = self._spare
+        # References: this attribute, the local name and getrefcount's own argument.
+        if spare is None or sys.getrefcount(spare) > 3 or spare is self._y:
+            spare = np.empty_like(self._y)
+        self._spare = None
+        return spare
 
     def snapshot(self):
         """Kinematics of the current state."""

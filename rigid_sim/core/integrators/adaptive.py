@@ -32,7 +32,8 @@ class Dopri5(Integrator):
         bodies = self.bodies
         self._inertia_scale = np.trace(bodies.inertia_body, axis1=1, axis2=2)  # kg m^2
         self._length = np.sqrt(self._inertia_scale / bodies.mass)   # radius of gyration, m
-        self._world = np.empty((bodies.count, 13))
+        self._work = (np.empty((bodies.count, 13)), np.empty((bodies.count, 3)), self._force,
+                      self._torque)
 
     def _scale(self, z, dt):
         """Per-component size (N, 13) of the body-axes state: lengths, 1 for q, momenta of
@@ -53,7 +54,8 @@ class Dopri5(Integrator):
 
     def _advance(self, y, time, h, substeps):
         for k in range(substeps):
-            self._interval(y, time + k * h, h)
+            with np.errstate(all='ignore'):   # a non-finite result is handled, not warned
+                self._interval(y, time + k * h, h)
             code = check_substep(y)
             if code != 0:
                 return code * (k + 1)
@@ -68,8 +70,8 @@ class Dopri5(Integrator):
 
         def slope(t, flat):
             self.evaluations += 1
-            return body_momentum_derivative(flat.reshape(shape), self._world, model, effects,
-                                            t, self._force, self._torque, slope_out).ravel().copy()
+            return body_momentum_derivative(flat.reshape(shape), self._work, model, effects, t,
+                                            slope_out).ravel().copy()
 
         end = time + dt
         solver = RK45(slope, time, z.ravel().copy(), end, rtol=self.tolerance,

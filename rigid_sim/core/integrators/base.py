@@ -17,7 +17,6 @@ To write a new method, subclass :class:`Integrator`, set ``name``, ``order``, ``
 ``integrators/__init__.py``. Quaternions leave every step unit.
 """
 import numpy as np
-
 from rigid_sim.core import safeguards
 
 

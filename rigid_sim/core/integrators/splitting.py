@@ -25,6 +25,7 @@ from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.free_rotation import free_flow
@@ -128,8 +129,8 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
 
 
 @njit(cache=True)
-def strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
-                       a, b, drift):
+def _strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
+                        a, b, drift):
     """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
 
     Adjacent half kicks of consecutive sub-steps act at the same state and time, so they
@@ -153,6 +154,23 @@ def strang_composition(y, work, model, effects, time, h, substeps, weights, velo
     return 0
 
 
+# One kernel per drift, the choice a constant inside, so the per-body branch compiles away.
+@njit(cache=True)
+def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
+                         velocity_dependent, a, b):
+    """:func:`_strang_composition` drifting with the exact free flow."""
+    return _strang_composition(y, work, model, effects, time, h, substeps, weights,
+                               velocity_dependent, a, b, EXACT_DRIFT)
+
+
+@njit(cache=True)
+def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_dependent, a,
+                  b):
+    """:func:`_strang_composition` drifting with the DLM rotations."""
+    return _strang_composition(y, work, model, effects, time, h, substeps, weights,
+                               velocity_dependent, a, b, DLM_DRIFT)
+
+
 class StrangSplitting(Integrator):
     """Kick-drift-kick with a free-rotation drift; subclasses choose the drift."""
 
@@ -171,13 +189,14 @@ class StrangSplitting(Integrator):
         self.evaluations_per_step = kicks * (b.size if system.velocity_dependent else 1)
         self._work = (np.empty((count, 6)), np.empty((b.size, count, 6)), self._force,
                       self._torque)
+        self._kernel = CompiledCall(exact_flow_splitting if self.drift == EXACT_DRIFT
+                                    else dlm_splitting)
 
     def _advance(self, y, time, h, substeps):
         a, b = self._kick_tableau
-        return strang_composition(y, self._work, self.bodies.model,
-                                  self.system.effect_parameters(), time, h, substeps,
-                                  self._weights, self.system.velocity_dependent, a, b,
-                                  self.drift)
+        return self._kernel(y, self._work, self.bodies.model, self.system.effect_parameters(),
+                            time, h, substeps, self._weights, self.system.velocity_dependent,
+                            a, b)
 
 
 class DLM(StrangSplitting):

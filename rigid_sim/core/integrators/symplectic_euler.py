@@ -5,6 +5,7 @@ from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.integrators.base import Integrator
 
@@ -49,6 +50,10 @@ class SemiImplicitEuler(Integrator):
     order = 1
     bound = safeguards.SYMPLECTIC_EULER_STABILITY
 
+    def __init__(self, system, tolerance=1e-6):
+        super().__init__(system, tolerance)
+        self._kernel = CompiledCall(semi_implicit_euler)
+
     def _advance(self, y, time, h, substeps):
-        return semi_implicit_euler(y, self.bodies.model, self.system.effect_parameters(),
-                                   time, h, substeps, self._force, self._torque)
+        return self._kernel(y, self.bodies.model, self.system.effect_parameters(), time, h,
+                            substeps, self._force, self._torque)
