@@ -33,9 +33,9 @@ setup(
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
-        # benchmarks are tested too.
-        'test': ['pytest', 'flake8', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py']
-        + BENCH,
+        # benchmarks are tested too; hypothesis drives the fuzz tests.
+        'test': ['pytest', 'flake8', 'hypothesis', 'colcon-core', 'colcon-ros',
+                 'colcon-python-setup-py'] + BENCH,
         'bench': BENCH,
     },
     zip_safe=True,
