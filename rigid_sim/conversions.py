@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Messages <-> arrays: the only place ROS messages meet the core's numpy arrays.
 
 Output messages are built once per scene and refilled on every publication: the pose of a
@@ -12,6 +14,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rigid_sim.core import rotation
@@ -23,14 +26,14 @@ PALETTE = ((0.90, 0.35, 0.20), (0.20, 0.55, 0.90), (0.30, 0.75, 0.35), (0.85, 0.
 
 
 def to_time(seconds, stamp=None):
-    """Simulated ``seconds`` as a builtin_interfaces/Time, filled into ``stamp`` if given."""
+    """Return simulated ``seconds`` as a builtin_interfaces/Time (filled into ``stamp``)."""
     stamp = Time() if stamp is None else stamp
     stamp.sec, stamp.nanosec = divmod(int(round(seconds * NANOSECONDS)), NANOSECONDS)
     return stamp
 
 
 def to_seconds(stamp):
-    """A builtin_interfaces/Time as float seconds."""
+    """Return a builtin_interfaces/Time as float seconds."""
     return stamp.sec + stamp.nanosec / NANOSECONDS
 
 
@@ -61,12 +64,12 @@ def pose_arrays(pose):
 
 
 def vector_array(vector):
-    """A geometry_msgs/Vector3 as a (3,) array."""
+    """Return a geometry_msgs/Vector3 as a (3,) array."""
     return np.array((vector.x, vector.y, vector.z))
 
 
 def clock(seconds):
-    """A rosgraph_msgs/Clock at simulated ``seconds``."""
+    """Return a rosgraph_msgs/Clock at simulated ``seconds``."""
     return Clock(clock=to_time(seconds))
 
 
@@ -75,9 +78,12 @@ class StateMessages:
 
     Attributes
     ----------
-    poses, twists, odometry : lists of N PoseStamped, TwistStamped, Odometry (scene order)
-    pose_array : PoseArray of the same N Pose objects
-    markers : MarkerArray, one marker per body, sharing the same Pose objects
+    poses, twists, odometry : list of N PoseStamped, TwistStamped, Odometry
+        One per body, in scene order.
+    pose_array : PoseArray
+        The same N Pose objects.
+    markers : MarkerArray
+        One marker per body, sharing the same Pose objects.
     """
 
     def __init__(self, bodies, world_frame):
@@ -99,10 +105,11 @@ class StateMessages:
             odometry.pose.pose = pose
 
     def fill(self, snapshot, posed, moving):
-        """Write the pose of the bodies ``posed`` and the world and body twists of the bodies
-        ``moving`` at ``snapshot`` (index iterables; each message costs Python time).
+        """Write the poses of ``posed`` and the twists of ``moving`` at ``snapshot``.
 
-        Every message's stamp is the snapshot's time; the others keep their last values.
+        ``posed`` and ``moving`` are iterables of body indices; each message costs Python time. The
+        world and body twists are written. Every message's stamp is the snapshot's time; the others
+        keep their last values.
         """
         origin, orientation = snapshot.body_frame_pose()
         velocity, angular_velocity = snapshot.body_frame_twist()
@@ -133,7 +140,7 @@ def _set_twist(twist, values):
 
 
 def marker(index, body, pose):
-    """The RViz marker of one body's shape, drawn at ``pose`` (its body frame).
+    """Return the RViz marker of one body's shape, drawn at ``pose`` (its body frame).
 
     ``body`` is a scene BodySpec; cylinders are along the body z axis, as RViz draws them.
     """
@@ -159,8 +166,37 @@ def marker(index, body, pose):
     return result
 
 
+def imu_message(frame_id, spec):
+    """A sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
+
+    The angular velocity and linear acceleration covariances are diagonal: the variance of
+    one reading's white noise (the bias is not white; it is what an estimator tracks). The
+    orientation is exact: its covariance is zero, as for noise-free readings; sensor_msgs
+    reads an all-zero covariance as "unknown".
+    """
+    message = Imu()
+    message.header.frame_id = frame_id
+    for covariance, noise in ((message.angular_velocity_covariance, spec.gyro),
+                              (message.linear_acceleration_covariance, spec.accel)):
+        covariance[[0, 4, 8]] = 0.0 if noise is None else noise.variance
+    return message
+
+
+def fill_imu(message, readings, row):
+    """Write row ``row`` of ``readings`` (rigid_sim.core.imu.Readings) into ``message``."""
+    to_time(readings.time, message.header.stamp)
+    q = message.orientation
+    q.x, q.y, q.z, q.w = readings.orientation[row].tolist()
+    _set_vector(message.angular_velocity, readings.angular_velocity[row])
+    _set_vector(message.linear_acceleration, readings.specific_force[row])
+
+
+def _set_vector(vector, values):
+    vector.x, vector.y, vector.z = values.tolist()
+
+
 def diagnostics(name, stamp_seconds, level, summary, values):
-    """A DiagnosticArray with one status; ``values`` maps key -> value (formatted as text)."""
+    """Return a DiagnosticArray of one status; ``values`` maps key -> value (shown as text)."""
     status = DiagnosticStatus(level=level, name=name, message=summary, hardware_id='rigid_sim')
     status.values = [KeyValue(key=key, value=_text(value)) for key, value in values.items()]
     array = DiagnosticArray(status=[status])
@@ -177,5 +213,5 @@ def _text(value):
 
 
 def diagnostic_values(message):
-    """The key -> text values of the first status of a DiagnosticArray."""
+    """Return the key -> text values of the first status of a DiagnosticArray."""
     return {item.key: item.value for item in message.status[0].values}

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """What the node reports on /diagnostics: one window of ticks, the world's health, a level.
 
 Kept apart from the node so that the node only wires topics and timers; nothing here talks
@@ -33,7 +35,7 @@ class TickStats:
         return self.step_total / max(self.ticks, 1)
 
     def real_time_factor(self, sim_time):
-        """Simulated seconds advanced per wall second since the window began."""
+        """Return the simulated seconds advanced per wall second since the window began."""
         return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
 
 
@@ -63,11 +65,23 @@ def refusal_values(refused, last_refusal):
             'last refused input': last_refusal}
 
 
-def health(stats, tick_period):
-    """Diagnostic level and summary of the window that ``stats`` covers."""
+def health(stats, tick_period, dropped=0):
+    """Diagnostic level and summary of the window that ``stats`` covers.
+
+    Parameters
+    ----------
+    stats : TickStats
+    tick_period : float or None
+        s of wall time per tick; None when the node ticks as fast as it can.
+    dropped : int
+        Ticks given up in the window because the simulation fell behind wall time.
+    """
     if stats.failed_ticks:
         return DiagnosticStatus.ERROR, (f'{stats.failed_ticks} ticks stopped at a step that '
                                         f'stayed non-finite; state kept')
-    if stats.step_mean > tick_period:
+    if dropped:
+        return DiagnosticStatus.WARN, (f'fell behind wall time: {dropped} ticks given up, '
+                                       'simulated time runs slower than the rate')
+    if tick_period is not None and stats.step_mean > tick_period:
         return DiagnosticStatus.WARN, 'steps take longer than a tick'
     return DiagnosticStatus.OK, 'running'

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Entry point of the ``rigid_sim_node`` executable."""
 import sys
 
@@ -28,7 +30,7 @@ def _run():
         rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
         return 1
     try:
-        # Not the EventsExecutor: its spin() hangs on these wheels (ROS_NOTES).
+        # Not the EventsExecutor: its spin() hangs on these wheels (docs/ros_notes.md).
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         executor.spin()

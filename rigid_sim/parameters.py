@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The node's parameters: names, descriptors, defaults and the checks that refuse bad values.
 
 Every parameter is declared with ``dynamic_typing`` so that a numeric one accepts an integer
@@ -15,8 +17,9 @@ from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.core.text import shown
 from rigid_sim.resources import DEFAULT_SCENE
 
-MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer
+MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (docs/ros_notes.md)
 # Hz; one tick at least every 1000 s keeps the timer period and the diagnostics meaningful.
+# Rate 0 is apart: it means no wall clock at all.
 MIN_RATE = 1e-3
 # s; a ROS stamp counts nanoseconds, so a shorter step would not advance /clock at all.
 MIN_TIME_STEP = 1e-9
@@ -29,6 +32,9 @@ MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
 # A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
 FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
 MAX_FRAME_NAME = 100
+MAX_STEP_TICKS = 10000  # one ~/step call blocks the executor for this many ticks at most
+# With rate 0 (no wall clock), time_step and publish_rate default to those of this rate.
+UNTIMED_DEFAULT_RATE = 100.0
 # Parameters rclpy declares on every node; an override of these is not a misspelling.
 NODE_BUILTINS = ('use_sim_time', 'start_type_description_service', 'qos_overrides')
 
@@ -51,11 +57,23 @@ class Settings:
     wrench_timeout: float  # s of simulated time a wrench is held; 0 holds until replaced
     world_frame: str       # frame_id of the fixed frame
     publish_clock: bool    # publish /clock
+    start_paused: bool     # integration paused at start
+    step_ticks: int        # ticks one ~/step call advances
 
     @property
     def publish_every(self):
-        """Ticks between two publications: ``round(rate / publish_rate)``, at least 1."""
-        return max(1, round(self.rate / self.publish_rate))
+        """Ticks between two publications, at least 1.
+
+        ``round(rate / publish_rate)``; with ``rate`` 0 there is no wall clock and
+        ``publish_rate`` counts in simulated time: ``round(1 / (publish_rate time_step))``.
+        """
+        per_second = self.rate if self.rate > 0.0 else 1.0 / self.time_step
+        return max(1, round(per_second / self.publish_rate))
+
+    @property
+    def real_time_factor(self):
+        """Simulated seconds per wall second the loop aims at; None at rate 0 (no aim)."""
+        return self.rate * self.time_step if self.rate > 0.0 else None
 
 
 @dataclass(frozen=True)
@@ -71,14 +89,17 @@ class Spec:
 SPECS = {
     'scene': Spec(str, 'scene YAML file; a bare name is looked up in the working directory, '
                        'then in share/rigid_sim/config and its scenes/'),
-    'rate': Spec(float, 'ticks per second of wall time, Hz', MIN_RATE, MAX_RATE),
-    'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start; a later '
-                             'change of rate keeps it); time_step x rate is the real-time '
-                             'factor', MIN_TIME_STEP, 10.0),
+    'rate': Spec(float, 'ticks per second of wall time, Hz; 0: no wall clock, tick as fast '
+                        'as the CPU allows', 0.0, MAX_RATE),
+    'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start, '
+                             f'1/{UNTIMED_DEFAULT_RATE:g} with rate 0; a later change of rate '
+                             'keeps it); time_step x rate is the real-time factor',
+                      MIN_TIME_STEP, 10.0),
     'substeps': Spec(int, 'integrator steps per tick', 1, MAX_SUBSTEPS),
     'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
                                 'and markers go out (default rate at start): every '
-                                'round(rate / publish_rate)-th tick, at most once per tick',
+                                'round(rate / publish_rate)-th tick, at most once per tick; '
+                                'with rate 0, Hz of simulated time',
                          MIN_RATE, MAX_RATE),
     'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
     'tolerance': Spec(float, 'error target of adaptive integrators', MIN_TOLERANCE, 1.0),
@@ -87,11 +108,13 @@ SPECS = {
     'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses: name '
                              'tokens (letters, digits, _) joined by /'),
     'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
+    'start_paused': Spec(bool, 'start with integration paused (read at start only)'),
+    'step_ticks': Spec(int, 'ticks that one ~/step call advances', 1, MAX_STEP_TICKS),
 }
 
 
 def descriptor(name):
-    """The ParameterDescriptor of parameter ``name``: description, type note and range."""
+    """Return the ParameterDescriptor of parameter ``name``: description, type note and range."""
     spec = SPECS[name]
     numeric = ' (integer literals accepted)' if spec.kind is float else ''
     result = ParameterDescriptor(
@@ -128,6 +151,9 @@ def _check_range(name, spec, value):
     if not (math.isfinite(value) and spec.low <= value <= spec.high):
         raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
                              f'[{spec.low:g}, {spec.high:g}]')
+    if name == 'rate' and 0.0 < value < MIN_RATE:
+        raise ParameterError(f'parameter {name!r}: {value!r} is neither 0 (no wall clock) nor '
+                             f'at least {MIN_RATE:g} Hz')
 
 
 def _check_text(name, value):
@@ -153,7 +179,8 @@ def _check_integrator(name):
 def declare(node):
     """Declare every parameter on ``node`` and return the validated Settings.
 
-    ``time_step`` defaults to ``1 / rate`` and ``publish_rate`` to ``rate``, so ``rate`` is
+    ``time_step`` defaults to ``1 / rate`` and ``publish_rate`` to ``rate`` (with ``rate``
+    0, to those of ``UNTIMED_DEFAULT_RATE``), so ``rate`` is
     read before they are declared.
 
     Raises
@@ -165,12 +192,13 @@ def declare(node):
     values = {}
     defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
-                'world_frame': 'world', 'publish_clock': True}
+                'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
+                'step_ticks': 1}
     for name in SPECS:
         if name == 'time_step':
-            defaults[name] = 1.0 / values['rate']
+            defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)
         elif name == 'publish_rate':
-            defaults[name] = values['rate']
+            defaults[name] = values['rate'] or UNTIMED_DEFAULT_RATE
         # Checked here before rclpy sees it, so a refusal at start gives the same reason
         # as at runtime; the declared value is the coerced one (50.0 for -p rate:=50).
         override = node._parameter_overrides.get(name)
@@ -182,7 +210,7 @@ def declare(node):
 
 def _check_unknown_overrides(node):
     # rclpy keeps the overrides of --params-file and -p only in this attribute (also read
-    # by declare); without the check a misspelt name is silently ignored (ROS_NOTES).
+    # by declare); without the check a misspelt name is silently ignored (docs/ros_notes.md).
     unknown = sorted(set(node._parameter_overrides) - set(SPECS) - set(NODE_BUILTINS))
     unknown = [name for name in unknown if not name.startswith('qos_overrides.')]
     if unknown:
@@ -191,7 +219,9 @@ def _check_unknown_overrides(node):
 
 
 def updated(settings, changes):
-    """Settings with ``changes`` (rclpy Parameters) applied, or ParameterError saying why not.
+    """Return the settings with ``changes`` (rclpy Parameters) applied.
+
+    Raises ParameterError saying why a change is refused.
 
     Parameters that are not this node's own (``use_sim_time``) are passed over.
     """

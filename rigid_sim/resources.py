@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Finding the packaged configuration: source tree, pip install and colcon install alike.
 
 ``config/`` is installed to ``share/rigid_sim/config``. Where that share directory is
@@ -21,7 +23,7 @@ _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def _ament_share():
-    """The share directory the ament index knows, or None outside a ROS environment."""
+    """Return the share directory the ament index knows, or None outside a ROS environment."""
     try:
         from ament_index_python.packages import (PackageNotFoundError,
                                                  get_package_share_directory)
@@ -63,8 +65,8 @@ def find_scene(name):
     An absolute path, or a path relative to the working directory, is taken as it is, as
     soon as something exists there (a FIFO or directory is then refused by the loader as
     not a regular file, not reported missing); a bare file name not found there is looked
-    up in the packaged ``config`` (INTERFACE.md), then in ``config/scenes``, where the
-    shipped scenes are.
+    up in the packaged ``config`` (README), then in ``config/scenes``, where the shipped
+    scenes are.
 
     Raises
     ------

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """A rigid_sim node and a probe node in one executor, driven tick by tick.
 
 The probe talks to the node only over ROS: it subscribes to every output, publishes
@@ -19,7 +21,7 @@ from visualization_msgs.msg import MarkerArray
 from rigid_sim import conversions
 from rigid_sim.node import RigidSimNode
 
-TIMEOUT = 15.0  # s; first discovery between processes takes 0.3-3.7 s (ROS_NOTES)
+TIMEOUT = 15.0  # s; first discovery between processes can take seconds (docs/ros_notes.md)
 
 
 def spin_until(executor, condition, timeout=TIMEOUT, what='condition'):
@@ -37,22 +39,30 @@ class SimHarness:
     Parameters
     ----------
     context : rclpy.Context
-    executor : rclpy.executors.Executor, spinning both nodes
-    scene : str, scene file
-    params : dict, further parameter overrides of the node
+        The test's own context (discovery OFF).
+    executor : rclpy.executors.Executor
+        Spins both nodes.
+    scene : str
+        Scene file.
+    params : dict
+        Further parameter overrides of the node.
+    ticking : bool
+        Keep the node's own tick loop; by default it is stopped and the test advances the
+        node with :meth:`tick`.
     """
 
-    def __init__(self, context, executor, scene, params):
+    def __init__(self, context, executor, scene, params, ticking=False):
         overrides = [Parameter(name, value=value)
                      for name, value in dict(params, scene=scene).items()]
         self.sim = RigidSimNode(context=context, parameter_overrides=overrides)
-        self.sim.timer.cancel()  # the test advances the node with tick()
+        if not ticking:
+            self.sim.loop.stop()
         self.probe = Node('probe', context=context)
         self.executor = executor
         executor.add_node(self.sim)
         executor.add_node(self.probe)
         self.received = defaultdict(list)
-        self._wrench_publishers = {}
+        self._publishers = {}
         self._subscriptions = []
         self.listen()
 
@@ -96,7 +106,7 @@ class SimHarness:
         return topics
 
     def latest(self, topic):
-        """The last message received on the node-relative ``topic`` (or absolute /name)."""
+        """Return the last message received on the node-relative ``topic`` (or absolute /name)."""
         return self.received[topic if topic.startswith('/') else self.topic(topic)][-1]
 
     def state(self, body):
@@ -110,23 +120,51 @@ class SimHarness:
                 conversions.vector_array(twist.twist.angular),
                 conversions.to_seconds(pose.header.stamp))
 
-    def push(self, body, frame_id, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)):
-        """Publish a WrenchStamped on ``~/<body>/wrench`` and wait until the node holds it."""
-        if body not in self._wrench_publishers:
-            publisher = self.probe.create_publisher(WrenchStamped, self.topic(f'{body}/wrench'),
+    def send(self, body, topic, message):
+        """Publish ``message`` on ``~/<body>/<topic>`` and wait until the node stored it.
+
+        The first message on a topic waits until the node subscribes (set_pose and
+        set_twist: once it has seen the publisher, within the node's DEMAND_REFRESH).
+        """
+        key = (body, topic)
+        if key not in self._publishers:
+            publisher = self.probe.create_publisher(type(message), self.topic(f'{body}/{topic}'),
                                                     10)
             spin_until(self.executor, lambda: publisher.get_subscription_count() >= 1,
-                       what=f'{body}/wrench matched')
-            self._wrench_publishers[body] = publisher
+                       what=f'{body}/{topic} matched')
+            self._publishers[key] = publisher
+        waiting = self.sim.pending_inputs
+        self._publishers[key].publish(message)
+        spin_until(self.executor, lambda: self.sim.pending_inputs > waiting,
+                   what=f'{topic} received')
+
+    def set_pose(self, body, position, orientation, frame_id='world'):
+        """Send a PoseStamped on ``~/<body>/set_pose``."""
+        message = PoseStamped()
+        message.header.frame_id = frame_id
+        pose = message.pose
+        pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
+        q = pose.orientation
+        q.x, q.y, q.z, q.w = (float(v) for v in orientation)
+        self.send(body, 'set_pose', message)
+
+    def set_twist(self, body, linear, angular, frame_id='world'):
+        """Send a TwistStamped on ``~/<body>/set_twist`` (world axes)."""
+        message = TwistStamped()
+        message.header.frame_id = frame_id
+        twist = message.twist
+        twist.linear.x, twist.linear.y, twist.linear.z = (float(v) for v in linear)
+        twist.angular.x, twist.angular.y, twist.angular.z = (float(v) for v in angular)
+        self.send(body, 'set_twist', message)
+
+    def push(self, body, frame_id, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)):
+        """Publish a WrenchStamped on ``~/<body>/wrench`` and wait until the node holds it."""
         message = WrenchStamped()
         message.header.frame_id = frame_id
         wrench = message.wrench
         wrench.force.x, wrench.force.y, wrench.force.z = (float(f) for f in force)
         wrench.torque.x, wrench.torque.y, wrench.torque.z = (float(t) for t in torque)
-        waiting = self.sim.pending_inputs
-        self._wrench_publishers[body].publish(message)
-        spin_until(self.executor, lambda: self.sim.pending_inputs > waiting,
-                   what='wrench received')
+        self.send(body, 'wrench', message)
 
     def call(self, service_type, name, request):
         """Call the node-relative service ``name`` from the probe and return the response."""

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The node's physics as seen over ROS: inputs in, exact state out, services.
 
 Each test starts the node and a probe in one executor (see ``ros_harness``), advances the
@@ -58,7 +60,7 @@ EXACT_FOR_CONSTANT_FORCE = {'integrator': 'rk4'}
 
 @pytest.fixture
 def box(harness, write_scene):
-    """The three-body scene, stepped by STEP per tick, wrenches held until replaced."""
+    """Return the three-body scene, stepped by STEP per tick, wrenches held until replaced."""
     return harness(write_scene(SCENE), time_step=STEP, wrench_timeout=0.0,
                    **EXACT_FOR_CONSTANT_FORCE)
 
@@ -165,8 +167,10 @@ def test_held_wrench_stops_after_timeout(harness, write_scene):
     ('x' * 100_000, [1.0, 0, 0], [0, 0, 0], r'unknown frame_id .*\(100002 characters\)'),
 ])
 def test_refused_wrench_changes_nothing_and_is_counted(box, frame_id, force, torque, reason):
-    """A refused wrench neither acts nor replaces the wrench held under its frame_id; its
-    reason is quoted short and no numpy warning (overflow of 1e300 squared) is raised."""
+    """A refused wrench neither acts nor replaces the wrench held under its frame_id.
+
+    Its reason is quoted short and no numpy warning (overflow of 1e300 squared) is raised.
+    """
     held = [2.0, 0.0, 0.0]
     box.push('box', 'world', held)
     box.tick(4)
@@ -272,7 +276,7 @@ bodies:
 
 
 def test_pose_array_and_markers_show_every_body_in_scene_order(box):
-    """PoseArray and MarkerArray list the bodies in scene order, with their shapes' sizes."""
+    """Both PoseArray and MarkerArray list the bodies in scene order, with their shapes' sizes."""
     box.tick(1)
     poses = box.latest('poses').poses
     assert len(poses) == 3
@@ -304,11 +308,13 @@ def test_diagnostics_report_energy_and_momentum_of_free_bodies(box):
 
 def test_step_that_stays_non_finite_is_given_up_keeping_the_last_good_state(
         harness, write_scene):
-    """RK4 on a spring with k/m = 1e30 (1e15 N/m on 1e-15 kg, the extremes a scene may
-    give) needs omega h < 2.8, i.e. 4e13 substeps per 1/8 s tick;
-    capped at 1000 (and retried at up to 16000), each substep multiplies the state by about
-    (omega h)^4 / 24 >> 1 and overflows: the node keeps the initial state (finite, at t = 0),
-    keeps publishing it, and /diagnostics reports ERROR."""
+    """RK4 on a spring with k/m = 1e30 needs omega h < 2.8, i.e. 4e13 substeps per 1/8 s tick.
+
+    The spring is 1e15 N/m on 1e-15 kg, the extremes a scene may give. Capped at 1000 (and
+    retried at up to 16000), each substep multiplies the state by about (omega h)^4 / 24 >> 1
+    and overflows: the node keeps the initial state (finite, at t = 0), keeps publishing it,
+    and /diagnostics reports ERROR.
+    """
     scene = write_scene(f"""
 effects:
   springs:
@@ -332,9 +338,11 @@ bodies:
 
 def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
         ros_context, write_scene):
-    """Outputs nobody listens to are skipped; a subscriber that joins later gets the box's
-    pose within LISTENER_REFRESH of wall time (plus spinning): free flight x0 + v0 t at the
-    simulated time of its stamp."""
+    """Outputs nobody listens to are skipped.
+
+    A subscriber that joins later gets the box's pose within LISTENER_REFRESH of wall time (plus
+    spinning): free flight x0 + v0 t at the simulated time of its stamp.
+    """
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
     from rclpy.parameter import Parameter
@@ -343,7 +351,7 @@ def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
     from ros_harness import spin_until
     sim = RigidSimNode(context=ros_context, parameter_overrides=[
         Parameter('scene', value=write_scene(SCENE)), Parameter('time_step', value=STEP)])
-    sim.timer.cancel()
+    sim.loop.stop()
     late = Node('late', context=ros_context)
     executor = SingleThreadedExecutor(context=ros_context)
     for node in (sim, late):

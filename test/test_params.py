@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Parameters: declared defaults, integer literals, refusals at start and at runtime.
 
 A refused value at start raises ParameterError (the executable turns it into a message and
@@ -52,7 +54,7 @@ def test_integer_literals_accepted_and_time_step_defaults_to_one_over_rate(
     settings = node.settings
     assert (settings.rate, settings.wrench_timeout, settings.tolerance) == (50.0, 2.0, 1.0)
     assert settings.time_step == 1 / 50 and settings.publish_rate == 50.0
-    assert node.timer.timer_period_ns == 20_000_000
+    assert node.loop.timer.timer_period_ns == 20_000_000
     node.destroy_node()
 
 
@@ -66,7 +68,7 @@ def test_clock_advances_by_time_step_per_tick(harness, write_scene):
 
 
 def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, write_scene):
-    """rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
+    """At rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
     sim = harness(write_scene(SCENE), rate=100.0, publish_rate=25.0, time_step=0.125)
     sim.tick(8)
     assert len(sim.received['/clock']) == 8
@@ -112,20 +114,30 @@ def test_misspelt_parameter_in_params_file_is_refused(ros_context, write_scene, 
 
 
 def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context):
-    """config/rigid_sim.yaml names each parameter once, with the value it has by default."""
-    listed = yaml.safe_load(SHIPPED_PARAMETERS.read_text())['/**']['ros__parameters']
-    assert sorted(listed) == sorted(SPECS)
-    with_file = RigidSimNode(context=ros_context, cli_args=[
-        '--ros-args', '--params-file', str(SHIPPED_PARAMETERS)])
-    without_file = RigidSimNode(context=ros_context)
-    assert with_file.settings == without_file.settings
-    with_file.destroy_node()
-    without_file.destroy_node()
+    """config/rigid_sim.yaml names each parameter once; what it sets has its default value,
+    and the two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in
+    a comment: the file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs."""
+    text = SHIPPED_PARAMETERS.read_text()
+    listed = yaml.safe_load(text)['/**']['ros__parameters']
+    follow_rate = {'time_step', 'publish_rate'}
+    assert sorted(listed) == sorted(set(SPECS) - follow_rate)
+    assert all(f'# {name}:' in text for name in follow_rate)
+    for rate in ([], ['-p', 'rate:=50']):
+        with_file = RigidSimNode(context=ros_context, cli_args=[
+            '--ros-args', '--params-file', str(SHIPPED_PARAMETERS), *rate])
+        without_file = RigidSimNode(context=ros_context, cli_args=['--ros-args', *rate])
+        assert with_file.settings == without_file.settings
+        with_file.destroy_node()
+        without_file.destroy_node()
+    assert with_file.settings.real_time_factor == 1.0
+    assert (with_file.settings.rate, with_file.settings.publish_rate) == (50.0, 50.0)
 
 
 def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_scene):
-    """ros2 param set with a bad value or a malformed scene: refused with the reason, and
-    the node keeps simulating its scene with its previous settings."""
+    """ros2 param set with a bad value or a malformed scene.
+
+    Refused with the reason, and the node keeps simulating its scene with its previous settings.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     before = sim.sim.settings
     rate, = sim.set_parameters(rate=-5.0)
@@ -181,13 +193,16 @@ def test_hostile_runtime_values_are_refused_and_the_clock_keeps_advancing(harnes
 
 
 def test_runtime_changes_take_effect(harness, write_scene):
-    """Accepted changes apply at once: rate (an integer literal) sets the timer period,
-    world_frame the stamps' frame, integrator the method, scene a new world at time 0."""
+    """Accepted changes apply at once.
+
+    ``rate`` (an integer literal) sets the timer period, ``world_frame`` the stamps' frame,
+    ``integrator`` the method, ``scene`` a new world at time 0.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     sim.tick(2)
     assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',
                                                         integrator='euler'))
-    assert sim.sim.timer.timer_period_ns == 50_000_000
+    assert sim.sim.loop.timer.timer_period_ns == 50_000_000
     assert sim.sim.world.integrator.name == 'euler'
     sim.tick(1)
     assert sim.latest('box/odom').header.frame_id == 'map'

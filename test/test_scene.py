@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Scene files: every shipped scene builds, every mistake is refused with file, key and reason."""
 import copy
 import glob
@@ -45,7 +47,7 @@ VALID = {
 
 
 def scene_with(change):
-    """A deep copy of the valid scene with ``change(data)`` applied."""
+    """Return a deep copy of the valid scene with ``change(data)`` applied."""
     data = copy.deepcopy(VALID)
     change(data)
     return data
@@ -62,8 +64,11 @@ def test_valid_scene_parses():
 
 
 def test_given_inertia_in_either_spelling_is_the_tensor_given():
-    """``given: {matrix: ..}`` (INTERFACE.md) and ``diagonal: ..`` both give the body exactly
-    the principal moments written, about its centre of mass."""
+    """Both spellings of a given inertia give the body exactly the moments written.
+
+    ``given: {matrix: ..}`` (README) and ``diagonal: ..`` give the principal moments written,
+    about the centre of mass.
+    """
     tensor = [[0.003, 0.001, 0.0], [0.001, 0.003, 0.0], [0.0, 0.0, 0.004]]   # moments 2, 4, 4
     nested = parse_scene(scene_with(put('bodies', 1, 'inertia', {'given': {'matrix': tensor}})))
     diagonal = {'diagonal': [0.002, 0.004, 0.004]}
@@ -103,8 +108,10 @@ def first_flip_of_free_plate(size, mass, omega_body, end):
 
 
 def test_default_scene_handle_flips_as_a_free_body():
-    """The default handle is torque-free (hung at its centre of mass): it flips about its
-    intermediate axis when Euler's equations say, with |L| constant."""
+    """The default handle is torque-free (hung at its centre of mass).
+
+    It flips about its intermediate axis when Euler's equations say, with |L| constant.
+    """
     world = build_world(load_scene(os.path.join(CONFIG, 'scenes', 'default.yaml')))
     flip = first_flip_of_free_plate((0.20, 0.10, 0.04), 0.5, [0.01, 6.0, 0.0], 5.0)
     handle = world.bodies.index('handle')
@@ -198,7 +205,7 @@ def test_mesh_path_is_relative_to_the_scene_file(tmp_path, monkeypatch):
 
 
 def put(*path_and_value):
-    """A change that sets ``data[path...] = value``, making missing mappings on the way."""
+    """Return a change that sets ``data[path...] = value``, making missing mappings on the way."""
     *path, key, value = path_and_value
 
     def change(data):
@@ -209,7 +216,7 @@ def put(*path_and_value):
 
 
 def drop(*path):
-    """A change that deletes ``data[path...]``."""
+    """Return a change that deletes ``data[path...]``."""
     def change(data):
         for step in path[:-1]:
             data = data[step]
@@ -343,7 +350,7 @@ def test_missing_file_is_refused(tmp_path):
     ('world', ('world', None)), ('', ('body', None)), ('box', ('body', None)),
     ('box/thruster', ('point', [0.2, 0.0, 0.0]))])
 def test_wrench_target_maps_frame_ids(frame_id, expected):
-    """frame_id picks the axes and the point a wrench acts at, as INTERFACE.md tabulates."""
+    """frame_id picks the axes and the point a wrench acts at, as the README tabulates."""
     box = parse_scene(copy.deepcopy(VALID)).bodies[0]
     frame, point = wrench_target(box, frame_id, 'world')
     assert frame == expected[0]

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Stepping many bodies in one array is the same physics as stepping each body alone.
 
 Bodies that share no effect are independent systems, so a vectorised step over all of them
@@ -41,7 +43,7 @@ FRAMES = ('world', 'body', 'point', 'world_point', 'body')
 
 
 def build(members, integrator):
-    """A World of the bodies ``members`` (scene indices) with every effect acting on them."""
+    """Return a World of the bodies ``members`` (scene indices), every effect acting on them."""
     members = list(members)
     bodies = RigidBodies(tuple(f'b{i}' for i in members), MASS[members], INERTIA[members],
                          COM[members])
@@ -71,8 +73,10 @@ def advance(world):
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_vectorised_step_equals_each_system_alone(name):
-    """Each independent body (and the spring-joined pair) ends where it would alone, to
-    round-off; the joined pair really interacts (its motion differs without the spring)."""
+    """Each independent body (and the spring-joined pair) ends where it would alone, to round-off.
+
+    The joined pair really interacts (its motion differs without the spring).
+    """
     together = advance(build(range(COUNT), name))
     systems = [PAIR] + [(i,) for i in range(COUNT) if i not in PAIR]
     agreement = ADAPTIVE_AGREEMENT if REGISTRY[name].adaptive else AGREEMENT

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench accuracy``: what each integrator's accuracy costs in CPU time.
 
 Every registered integrator runs every case of :mod:`rigid_sim.bench.cases` at each fixed
@@ -141,7 +143,7 @@ def case_table(results, case):
 
 
 def cheapest(results, case_key, level, methods):
-    """The least CPU time among ``methods`` reaching orientation error <= ``level``."""
+    """Return the least CPU time among ``methods`` reaching orientation error <= ``level``."""
     hits = [r for r in results if r.case == case_key and r.method in methods
             and r.orientation_error <= level]
     return min(hits, key=lambda r: r.cpu_time, default=None)
@@ -211,7 +213,7 @@ def skipped_notes(skipped):
 
 
 def report(results, skipped, cases, plot_path, versions):
-    """The Markdown section: setup, a table per case, skipped settings, plot, readings."""
+    """Return the Markdown section: setup, a table per case, skipped settings, plot, readings."""
     parts = ['## Integrator accuracy against CPU time', f'Command: `{bench.command_line()}`',
              '\n'.join(bench.machine_description(versions)),
              'Errors are at the final time against each case\'s exact oracle. Adaptive methods '

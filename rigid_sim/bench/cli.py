@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench``: the benchmark console script (entry point ``cli:main``)."""
 import argparse
 import sys
@@ -15,7 +17,7 @@ SUBCOMMANDS = (
 
 
 def build_parser():
-    """The argument parser of every subcommand."""
+    """Return the argument parser of every subcommand."""
     parser = argparse.ArgumentParser(
         prog='rigid_sim_bench', description='rigid_sim benchmarks: what accuracy costs in time.')
     commands = parser.add_subparsers(dest='command', required=True)

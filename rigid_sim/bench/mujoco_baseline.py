@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """MuJoCo's integrators on the torque-free benchmark cases (optional: needs ``mujoco``).
 
 The body is the same free body (mass 1 kg, diag(1, 2, 3) kg m^2), with gravity off and no
@@ -34,9 +36,12 @@ def require():
 
 
 def prepare(case, integrator, dt):
-    """A zero-argument callable that runs ``case`` to its end with MuJoCo and returns
-    (orientation (4,) (x, y, z, w), world angular velocity (3,), kinetic energy J,
-    world angular momentum (3,), centre of mass (3,)). Model building is outside the call."""
+    """Return a zero-argument callable that runs ``case`` to its end with MuJoCo.
+
+    The callable returns (orientation (4,) (x, y, z, w), world angular velocity (3,), kinetic
+    energy J, world angular momentum (3,), centre of mass (3,)). Model building is outside the
+    call.
+    """
     model = mujoco.MjModel.from_xml_string(
         MODEL.format(mass=MASS, i1=MOMENTS[0], i2=MOMENTS[1], i3=MOMENTS[2]))
     model.opt.timestep = dt
@@ -56,7 +61,7 @@ def prepare(case, integrator, dt):
 
 
 def _ignore_warning(message):
-    """MuJoCo warning handler that drops the message (the counters still count it)."""
+    """Drop a MuJoCo warning message (the counters still count it)."""
 
 
 def final_state(data):

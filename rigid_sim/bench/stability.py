@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench stability``: the hard cases, run long, through every integrator.
 
 Each case is a world with a known energy history (constant, or ``exp(-2 c t)`` under
@@ -33,7 +35,7 @@ SECTION = 'rigid_sim_bench stability'
 def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_substep=True,
           mass=1.0, scale=1.0, position=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0),
           orientation=IDENTITY, com=(0.0, 0.0, 0.0)):
-    """A world of bodies with principal moments ``mass scale^2 moments`` (N, 3), kg m^2.
+    """Return a world of bodies with principal moments ``mass scale^2 moments`` (N, 3), kg m^2.
 
     ``effects`` is a list of callables ``bodies -> effect``; ``omega`` (N, 3) rad/s, world.
     """
@@ -91,17 +93,17 @@ class HardCase:
     extra_energy: object = None  # world -> J added to world.energy() (a held force's potential)
 
     def energy(self, world_):
-        """The energy this case conserves (or whose decay it knows), J."""
+        """Return the energy this case conserves (or whose decay it knows), J."""
         extra = self.extra_energy(world_) if self.extra_energy else 0.0
         return world_.energy() + extra
 
     def exact(self, time_, energy0):
-        """The exact energy at ``time_``, J."""
+        """Return the exact energy at ``time_``, J."""
         return self.exact_energy(time_, energy0) if self.exact_energy else energy0
 
 
 def fast_spin_case(omega_dt):
-    """A body spun at 30 rad/s with a force at a point, stepped at ``|omega| dt``."""
+    """Return a body spun at 30 rad/s with a force at a point, stepped at ``|omega| dt``."""
     force, point = np.array([0.0, 0.0, -20.0]), np.array([0.1, 0.05, 0.0])
     return HardCase(
         f'fast_spin_{omega_dt:g}', f'fast spin, |omega| dt = {omega_dt:g}, offset force',
@@ -130,8 +132,10 @@ def scaled_case(key, mass, size, limit):
 
 
 def impulse_case():
-    """A body at rest kicked by a body-axes torque about its z axis for exactly one step, of
-    ``tau = 2 pi I3 / dt^2``: it turns by ``tau dt^2 / 2 I3 = pi`` within that step."""
+    """Return a body at rest kicked by a body-axes torque about z for exactly one step.
+
+    The torque ``tau = 2 pi I3 / dt^2`` turns it by ``tau dt^2 / 2 I3 = pi`` within that step.
+    """
     dt, moment = 0.01, 3.0
     torque = 2.0 * np.pi * moment / dt ** 2
     work = torque * np.pi   # J: the energy from the end of the kick on
@@ -147,8 +151,11 @@ def impulse_case():
 
 
 def far_mesh_case(offset=1e4):
-    """A unit box whose frame origin is ``offset`` sizes from it, its mass properties from
-    ``mesh_exact``; spinning torque-free, so its centre of mass stays put."""
+    """Return a unit box whose frame origin is ``offset`` sizes from it.
+
+    Its mass properties come from ``mesh_exact``; it spins torque-free, so its centre of mass
+    stays put.
+    """
     import trimesh
     from rigid_sim.core.inertia import mesh_exact
     box = trimesh.creation.box((1.0, 2.0, 3.0))

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench throughput``: CPU time per body-step against the number of bodies.
 
 N free bodies (1 kg, diag(0.1, 0.2, 0.3) kg m^2, each with its own tilt and spin) under
@@ -64,7 +66,7 @@ def bodies_and_state(n):
 
 @functools.lru_cache(maxsize=None)
 def effects_of(n, kinds):
-    """The effects named in ``kinds`` (gravity, wrench, damping, springs) for N bodies."""
+    """Return the effects named in ``kinds`` (gravity, wrench, damping, springs) for N bodies."""
     bodies, built = bodies_and_state(n)[0], []
     kinds = (kinds,) if isinstance(kinds, str) else kinds
     for kind in kinds:
@@ -146,7 +148,7 @@ def effect_costs(n, repeats):
 
 
 def effect_calls_without_effects(n, integrator='rk4', steps=5):
-    """Calls into ``rigid_sim/core/effects`` while a world with no effects steps: a count."""
+    """Count the calls into ``rigid_sim/core/effects`` while a world with no effects steps."""
     bodies, y = bodies_and_state(n)
     world = World(bodies, y, (), integrator)
     profile = cProfile.Profile()
@@ -206,7 +208,7 @@ def plot(results, sizes, path):
 
 
 def report(results, sizes, costs, effect_size, idle_calls, versions, plot_link):
-    """The Markdown section: setup, per-body-step table, ratios, effect costs, idle proof."""
+    """Return the Markdown section: setup, body-step table, ratios, effect costs, idle proof."""
     effect_rows = [[kind, f'{1e6 * cost:.3g}', f'{1e9 * cost / effect_size:.3g}']
                    for kind, cost in costs.items()]
     parts = ['### Setup', *bench.machine_description(versions),

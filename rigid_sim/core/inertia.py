@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Mass, centre of mass and inertia of shapes and meshes, exact and estimated.
 
 Every result is a :class:`MassProperties`: the inertia is about the centre of mass, in body
@@ -171,7 +173,7 @@ def load_mesh(path, scale=1.0):
 
 
 def _check_closed(mesh):
-    """ValueError unless ``mesh`` bounds a solid; never repaired, as a repair guesses."""
+    """Raise ValueError unless ``mesh`` bounds a solid; never repaired, as a repair guesses."""
     if not mesh.is_watertight:
         raise ValueError('mesh is not watertight (it has open edges): it bounds no volume')
     if not mesh.is_winding_consistent:
@@ -345,6 +347,8 @@ def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_d
         mass is then the shape's and a density multiplies the shape's volume.
     mass, density : float
         Exactly one: kg, or kg/m^3.
+    base_dir : str
+        Directory a mesh ``file`` is relative to (the scene file's).
     mesh : trimesh.Trimesh, optional
         The mesh of a mesh shape, already loaded (and scaled); it is not modified.
     """

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Quaternion helpers over arrays of bodies.
 
 Quaternions are scalar-last ``(x, y, z, w)``, the order of ROS messages and of
@@ -122,12 +124,12 @@ def multiply_rows(p, q):
 
 
 def normalize_rows(q, out=None):
-    """Unit quaternion rows, (4, N) -> (4, N)."""
+    """Return unit quaternion rows, (4, N) -> (4, N)."""
     return np.divide(q, np.sqrt(np.einsum('in,in->n', q, q)), out=out)
 
 
 def exp_map_rows(rotation_vector):
-    """Unit quaternion rows of rotation-vector rows (axis times angle), (3, N) -> (4, N).
+    """Return unit quaternion rows of rotation-vector rows (axis times angle), (3, N) -> (4, N).
 
     ``sin(a/2)/a`` is evaluated with ``np.sinc`` so a zero rotation needs no branch.
     """
@@ -185,12 +187,12 @@ def rotate_inverse(matrices, vectors):
 
 
 def exp_map(rotation_vector):
-    """Unit quaternions of rotation vectors (axis times angle), (N, 3) -> (N, 4)."""
+    """Return unit quaternions of rotation vectors (axis times angle), (N, 3) -> (N, 4)."""
     return exp_map_rows(np.asarray(rotation_vector).T).T
 
 
 def normalize(q):
-    """Unit quaternions, (N, 4) -> (N, 4)."""
+    """Return unit quaternions, (N, 4) -> (N, 4)."""
     return normalize_rows(np.asarray(q).T).T
 
 

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Step safeguards: substeps within each method's bounds, and no non-finite state, ever.
 
 Before a step the world asks :class:`StepGuard` how many equal substeps keep the chosen
@@ -195,11 +197,11 @@ class StepGuard:
 
 
 def finite_steps(integrator, y, time, dt, substeps):
-    """``y`` advanced by ``dt`` in ``substeps`` equal steps, or (None, why) at a non-finite value
-    or a lost orientation.
+    """Advance ``y`` by ``dt`` in ``substeps`` equal steps, unless a step fails.
 
-    Returns (state (N, 13) or None, '' or the failure). Floating-point warnings are silenced
-    here because a non-finite result is handled, not reported twice.
+    Returns (state (N, 13) or None, '' or the failure): None at a non-finite value or a lost
+    orientation. Floating-point warnings are silenced here because a non-finite result is
+    handled, not reported twice.
     """
     h = dt / substeps
     try:

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Scene files: YAML -> a validated :class:`Scene` -> a :class:`~rigid_sim.core.world.World`.
 
 The format is the "Scene file" section of the package's interface page, written down once
@@ -17,6 +19,7 @@ from rigid_sim.core.effects.applied_wrench import (
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
+from rigid_sim.core.imu import parse_imu
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -54,6 +57,7 @@ class BodySpec:
     angular_velocity: np.ndarray      # (3,) rad/s
     points: dict                      # name -> (3,) m, body-frame coordinates
     wrench_input: bool                # False: the body takes no applied wrenches
+    imu: object = None                # rigid_sim.core.imu.ImuSpec, or None: no IMU
 
 
 @dataclass(frozen=True)
@@ -89,7 +93,8 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
         'pose': (table({'position': (vector, ZERO),
                         'orientation': (quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
         'twist': (table({'linear': (vector, ZERO), 'angular': (vector, ZERO)}), {}),
-        'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True)}
+        'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True),
+        'imu': (raw, ABSENT)}
 SPRING = {'body': (token, REQUIRED), 'stiffness': (non_negative, REQUIRED),
           'point': (vector, ZERO), 'anchor': (vector, ABSENT), 'other': (token, ABSENT),
           'other_point': (vector, ABSENT), 'damping': (non_negative, 0.0),
@@ -109,7 +114,7 @@ SCENE = {'world_frame': (token, 'world'),
 
 
 def _shape(value, key, base_dir):
-    """Validated shape dict; a mesh file is resolved against the scene's directory."""
+    """Validate a shape dict; a mesh file is resolved against the scene's directory."""
     kind = value.get('type') if isinstance(value, dict) else None
     if not isinstance(kind, str) or kind not in SHAPES:
         where = f'{key}.type' if isinstance(value, dict) else key
@@ -128,9 +133,9 @@ def _shape(value, key, base_dir):
 
 
 def _inertia(value, key):
-    """Validated inertia method; a diagonal or matrix without a method means 'given'.
+    """Validate an inertia method; a diagonal or matrix without a method means 'given'.
 
-    ``given: {diagonal: [..]}`` (or ``matrix``), as INTERFACE.md writes it, is the same as
+    ``given: {diagonal: [..]}`` (or ``matrix``), as the README writes it, is the same as
     ``{method: given, diagonal: [..]}``.
     """
     inertia = fields(value, key, INERTIA)
@@ -180,7 +185,8 @@ def _body(value, key, budget):
         name=body['name'], shape=shape, mass_properties=properties,
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
         linear_velocity=body['twist']['linear'], angular_velocity=body['twist']['angular'],
-        points=body['points'], wrench_input=body['wrench_input'])
+        points=body['points'], wrench_input=body['wrench_input'],
+        imu=parse_imu(body['imu'], f'{key}.imu', body['points']) if 'imu' in body else None)
 
 
 def _bodies(entries, world_frame, budget):
@@ -217,8 +223,10 @@ def _end_in_world(body, point):
 
 
 def _check_spring_ends_apart(spec, key, bodies):
-    """A spring with a rest length must not start with both ends at one point: its force
-    ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero)."""
+    """Refuse a spring with a rest length whose ends start at one point.
+
+    Its force ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero).
+    """
     if spec.rest_length == 0.0:
         return
     start = _end_in_world(bodies[spec.body], spec.point)
@@ -230,7 +238,7 @@ def _check_spring_ends_apart(spec, key, bodies):
 
 
 def _spring(spring, key, names):
-    """A :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
+    """Return a :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
     if ('anchor' in spring) == ('other' in spring):
         raise Mistake(key, 'give exactly one of anchor (a world point) or other (a body)')
     if 'other_point' in spring and 'other' not in spring:
@@ -292,7 +300,7 @@ EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **setting
 
 
 def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
-    """The :class:`World` of ``scene``, with only the effects the scene lists.
+    """Return the :class:`World` of ``scene``, with only the effects the scene lists.
 
     ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. Applied wrenches
     are built only when some body takes wrench input.
@@ -317,7 +325,7 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
 
 
 def check_world_frame(scene, world_frame):
-    """ValueError if ``world_frame`` is also a body or point frame of ``scene``.
+    """Raise ValueError if ``world_frame`` is also a body or point frame of ``scene``.
 
     A wrench's ``frame_id`` would then name both world axes and a body's, so the node
     refuses such a ``world_frame`` as the scene loader refuses such a body or point name.

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Checkers for scene fields: each takes (value, key) and returns the value or raises Mistake.
 
 A field table maps a key to (checker, default); :func:`fields` walks one, so the scene
@@ -46,7 +48,7 @@ def describe(value):
 
 
 def fields(value, key, spec):
-    """A mapping checked against ``spec``: name -> (checker(value, key), default).
+    """Return a mapping checked against ``spec``: name -> (checker(value, key), default).
 
     A missing key takes its default (then checked), or is refused (REQUIRED), or stays
     missing (ABSENT). An unknown key is refused with the list of valid ones.
@@ -71,7 +73,7 @@ def table(spec):
 
 
 def list_of(check, what):
-    """A checker of a list whose items pass ``check``."""
+    """Return a checker of a list whose items pass ``check``."""
     def checked(value, key):
         if not isinstance(value, list):
             raise Mistake(key, f'expected a list of {what}, got {describe(value)}')
@@ -80,8 +82,11 @@ def list_of(check, what):
 
 
 def number(value, key, bound=None):
-    """A finite float of magnitude at most MAX_MAGNITUDE; ``bound`` 'positive' (then at least
-    1 / MAX_MAGNITUDE) or 'non-negative' adds a sign check."""
+    """Check a finite float of magnitude at most MAX_MAGNITUDE.
+
+    ``bound`` 'positive' (then at least 1 / MAX_MAGNITUDE) or 'non-negative' adds a sign
+    check.
+    """
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise Mistake(key, f'expected a number, got {describe(value)}')
     if isinstance(value, float) and not math.isfinite(value):
@@ -99,12 +104,12 @@ def number(value, key, bound=None):
 
 
 def _number_text(value):
-    """A number as written: shortest exact float, an int whole unless it is huge."""
+    """Format a number as written: shortest exact float, an int whole unless it is huge."""
     return repr(value) if isinstance(value, float) else shown(value)
 
 
 def count(value, key):
-    """A positive whole number (samples, limits); an integral float such as 1e6 is one."""
+    """Check a positive whole number (samples, limits); an integral float such as 1e6 is one."""
     if isinstance(value, float) and value.is_integer():
         value = int(value)
     if isinstance(value, bool) or not isinstance(value, int):
@@ -123,7 +128,7 @@ non_negative = partial(number, bound='non-negative')
 
 
 def vector(value, key, length=3, bound=None):
-    """A (length,) float array from a YAML list of finite numbers."""
+    """Check a (length,) float array from a YAML list of finite numbers."""
     if not isinstance(value, (list, tuple)) or len(value) != length:
         raise Mistake(key, f'expected a list of {length} numbers, got {describe(value)}')
     return np.array([number(item, f'{key}[{i}]', bound) for i, item in enumerate(value)])
@@ -138,7 +143,7 @@ def scale(value, key):
 
 
 def quaternion(value, key):
-    """Unit (x, y, z, w): a non-unit quaternion is normalised, a zero one refused."""
+    """Check a unit (x, y, z, w) rotation: a non-unit one is normalised, a zero one refused."""
     q = vector(value, key, 4)
     norm = np.linalg.norm(q)
     if norm < MIN_QUATERNION_NORM:

@@ -66,7 +66,7 @@ def _kind(mode):
 
 
 def read_text(path, max_bytes, what):
-    """The UTF-8 text of the regular file ``path``, at most ``max_bytes``, or FileRefused."""
+    """Read the UTF-8 text of the regular file ``path``, at most ``max_bytes``, or FileRefused."""
     check_file(path, max_bytes, what)
     try:
         with open(path, 'rb') as stream:
@@ -115,7 +115,7 @@ def where(mark):
 
 
 def check_structure(text):
-    """FileRefused if the YAML ``text`` nests deeper than MAX_DEPTH or has above MAX_NODES.
+    """Raise FileRefused if the YAML ``text`` nests deeper than MAX_DEPTH or exceeds MAX_NODES.
 
     Walks the parser's events with a stack, never recursing; an alias adds the size and
     height its anchor had. Syntax errors are left to the loader, which reports them.
@@ -163,7 +163,7 @@ def _refuse_depth(depth, event):
 
 
 def load_yaml(path):
-    """The YAML document of the scene file ``path``, within the limits above.
+    """Parse the YAML document of the scene file ``path``, within the limits above.
 
     Raises
     ------

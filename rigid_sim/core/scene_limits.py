@@ -40,7 +40,7 @@ class Budget:
         self.samples -= samples
 
     def mesh(self, shape, key):
-        """The loaded mesh of a mesh ``shape``, read at most once per scene."""
+        """Load the mesh of a mesh ``shape``, read at most once per scene."""
         path, scale = shape['file'], shape['scale']
         name = (path, tuple(np.broadcast_to(scale, 3).tolist()))
         if name not in self._meshes:

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Rigid bodies as arrays: the static model, the packed Baraff state and what derives from it.
 
 The static model (masses, inertias, centre-of-mass offsets) is kept apart from the dynamic
@@ -95,10 +97,16 @@ def initial_state(bodies, origin, orientation, linear_velocity, angular_velocity
 
     Parameters
     ----------
-    origin : (N, 3) body-frame origin, world, m
-    orientation : (N, 4) quaternion (x, y, z, w), body to world
-    linear_velocity : (N, 3) velocity of the body-frame origin, world, m/s
-    angular_velocity : (N, 3) world axes, rad/s
+    bodies : RigidBodies
+        The static model: masses, inertias and centre-of-mass offsets.
+    origin : (N, 3) float
+        Body-frame origin, world, m.
+    orientation : (N, 4) float
+        Quaternion (x, y, z, w), body to world.
+    linear_velocity : (N, 3) float
+        Velocity of the body-frame origin, world, m/s.
+    angular_velocity : (N, 3) float
+        World axes, rad/s.
     """
     q = rotation.normalize(np.asarray(orientation, dtype=float).reshape(-1, 4))
     matrices = rotation.to_matrix(q)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The world: bodies, their state, the effects the scene lists, and one integrator."""
 import numpy as np
 
@@ -42,7 +44,7 @@ class World:
         self._restart()   # keeps wrenches the effects were given before the world was built
 
     def effect(self, kind):
-        """The effect of class ``kind`` in this world, or None when the scene has none."""
+        """Return the effect of class ``kind`` in this world, or None when the scene has none."""
         return next((e for e in self.effects if isinstance(e, kind)), None)
 
     def reset(self):
@@ -107,7 +109,7 @@ class World:
         return self._guard.plan(self.integrator, y, dt, current)
 
     def _attempt(self, dt, substeps):
-        """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
+        """Return the state after ``dt``, retried in more substeps if non-finite (None: failed)."""
         for halving in range(safeguards.MAX_HALVINGS + 1):
             y, failure = safeguards.finite_steps(self.integrator, self.y, self.time, dt,
                                                  substeps << halving)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Effects: each adds world-axes forces and torques about the centre of mass for all bodies.
 
 An effect is a small object with

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Wrenches applied from outside (user commands), held until replaced or timed out.
 
 Each held wrench has a body, a key (the ROS frame_id it came with: a new wrench with the

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Linear and angular damping as decay rates of the momenta.
 
 ``F = -c_lin P`` and ``tau = -c_ang L`` (rates in 1/s) make free momenta decay exactly as

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Uniform gravity: ``F = M g`` at the centre of mass, so it never torques a body."""
 import numpy as np
 

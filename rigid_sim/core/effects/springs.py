@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Linear springs with dampers between body points and world anchors or other bodies.
 
 Each spring pulls its two attachment points together with
@@ -99,8 +101,10 @@ class Springs:
         return float(max(np.sqrt(per_body.max()), self.damping_rate().max()))
 
     def _ends(self, snapshot):
-        """World positions (E, 3) of the E spring ends on bodies (first ends, then second
-        ends on bodies), and the first and second ends' positions and velocities (S, 3) each.
+        """Return the positions of the spring ends on bodies, and of both ends of each spring.
+
+        Returns the world positions (E, 3) of the E ends on bodies (first ends, then second ends on
+        bodies), and the first and second ends' positions and velocities (S, 3) each.
         """
         points = snapshot.point_world(self._end_body, self._end_point)
         velocities = snapshot.point_velocity(self._end_body, points)

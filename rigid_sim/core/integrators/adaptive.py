@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Adaptive Dormand-Prince 5(4), driven through scipy's RK45 stepper.
 
 The error of each internal step is held below ``tolerance`` relative to a per-component
@@ -32,8 +34,10 @@ class Dopri5(Integrator):
         self._length = np.sqrt(self._inertia_scale / bodies.mass)   # radius of gyration, m
 
     def _scale(self, z, dt):
-        """Per-component size (13, N) of internal rows ``[L_b, x, q, P]``: lengths, 1 for q,
-        momenta of the body's own scale."""
+        """Per-component size (13, N) of internal rows ``[L_b, x, q, P]``.
+
+        Lengths, 1 for q, momenta of the body's own scale.
+        """
         momentum = np.linalg.norm(z[INNER_P], axis=0)
         angular = np.linalg.norm(z[INNER_L], axis=0)
         # A body at rest still has a natural momentum: moving its own size in one step.

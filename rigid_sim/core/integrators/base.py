@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The contract every integrator fulfils.
 
 An integrator advances the packed Baraff state ``y`` (N, 13) = [x, q, P, L] of all bodies
@@ -57,16 +59,21 @@ class Integrator:
 
         Parameters
         ----------
-        rows : (13, N) float, component-major state [x, q, P, L]
-        time : float, s
-        rotation_rows : (3, 3, N) float, optional, ``R`` if the caller has it
-        completion : callable, optional, finishes ``rows`` when an effect reads them
-            (see :class:`~rigid_sim.core.state.Snapshot`)
+        rows : (13, N) float
+            Component-major state [x, q, P, L].
+        time : float
+            s.
+        rotation_rows : (3, 3, N) float, optional
+            ``R`` of every body, if the caller has it.
+        completion : callable, optional
+            Finishes ``rows`` when an effect reads them
+            (see :class:`~rigid_sim.core.state.Snapshot`).
 
         Returns
         -------
-        force, torque : (3, N) float each, N and N m, world axes; rows of one buffer that the
-            next evaluation overwrites (copy them to keep them).
+        force, torque : (3, N) float each
+            N and N m, world axes; rows of one buffer that the next evaluation overwrites
+            (copy them to keep them).
         """
         self.evaluations += 1
         wrench = self._wrench
@@ -79,5 +86,5 @@ class Integrator:
         return force, torque
 
     def _step_impl(self, rows, time, dt):
-        """New C-contiguous rows (13, N) ``dt`` after ``rows`` (13, N), which stay untouched."""
+        """Return new C-contiguous rows (13, N) ``dt`` after ``rows`` (13, N), left untouched."""
         raise NotImplementedError

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The elliptic branch of the exact free flow, in a body's working frame.
 
 See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the working frame
@@ -52,14 +54,19 @@ def _first_kind(s, c, dn2):
 
 
 def _pi_minus(nu, s, c, dn2, first_kind):
-    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2; ``first_kind`` is ``F(phi | k^2)``,
-    the Carlson R_F part the two integrals share."""
+    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2.
+
+    ``first_kind`` is ``F(phi | k^2)``, the Carlson R_F part the two integrals share.
+    """
     return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
 
 
 def _complete_pi_minus(nu, mc, turns):
-    """``Pi(-nu | k^2)`` where ``turns`` is non-zero, else 0: only a body that passes a half
-    period in the step needs it, and at small steps few do (each costs two Carlson calls)."""
+    """``Pi(-nu | k^2)`` where ``turns`` is non-zero, else 0.
+
+    Only a body that passes a half period in the step needs it, and at small steps few do (each
+    costs two Carlson calls).
+    """
     complete = np.zeros_like(mc)
     passing = turns != 0.0
     if passing.any():
@@ -93,17 +100,21 @@ def _sn_cn_complementary(u, mc):
 
 
 def _sn_cn_first_order(u, mc):
-    """``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2), each to its
-    relative accuracy for |u| <= K/2."""
+    """Return ``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2).
+
+    Each is accurate relative to its own size for |u| <= K/2.
+    """
     sech, tanh = 1.0 / np.cosh(u), np.tanh(u)
     correction = 0.25 * mc * (np.sinh(u) * np.cosh(u) - u) * sech
     return tanh + correction * sech, sech - correction * tanh
 
 
 def _sn_cn_near_separatrix(v, mc, quarter):
-    """``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX, cn to its relative
-    accuracy. Beyond K/2, ``sn(K - w) = cd(w)`` and ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8)
-    give cn as sqrt(mc) times a number of order one, not as the cosine of an angle near pi/2.
+    """Return ``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX.
+
+    cn is accurate relative to its own size. Beyond K/2, ``sn(K - w) = cd(w)`` and
+    ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8) give cn as sqrt(mc) times a number of order one,
+    not as the cosine of an angle near pi/2.
     """
     far = np.abs(v) > 0.5 * quarter
     w = np.where(far, quarter - np.abs(v), np.abs(v))
@@ -118,8 +129,11 @@ def _sn_cn_near_separatrix(v, mc, quarter):
 
 
 def _jacobi_sn_cn(v, k2, mc, quarter):
-    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``: scipy's ``ellipj``, or from
-    ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech are exact)."""
+    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``.
+
+    scipy's ``ellipj``, or from ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech
+    are exact).
+    """
     sn, cn, _, _ = ellipj(v, k2)
     near = (mc > 0.0) & (mc < NEAR_SEPARATRIX)
     if near.any():   # rare: skip the ~40 numpy calls of an empty branch

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """What a Runge-Kutta method differentiates: Baraff's world momenta or body-axes momenta.
 
 Both describe the same motion. They differ in how an orientation error propagates: with
@@ -5,7 +7,7 @@ Baraff's world-axes ``L``, ``omega = R I_body^-1 R^T L`` depends on ``q``, so ev
 ``q`` feeds back into ``omega`` and grows. With the body-axes ``L_b = R^T L``,
 ``omega_b = I_body^-1 L_b`` does not depend on ``q`` at all (Euler's equations). Measured
 near the intermediate axis, RK4 is 1000-2500x more accurate at the same step in body axes
-(../shared/DESIGN.md, docs/accuracy.md). The public state stays Baraff's; only the inside
+(docs/accuracy.md). The public state stays Baraff's; only the inside
 of a step changes.
 
 A formulation is built per integrator and owns the buffers of its stages: the integrator
@@ -53,7 +55,7 @@ class WorldMomentum:
         return self.start
 
     def to_public(self, z):
-        """New public rows (13, N) of an internal state."""
+        """Return new public rows (13, N) of an internal state."""
         return z.copy()
 
     def slope(self, time, out):
@@ -99,7 +101,7 @@ class BodyMomentum:
         self.start = np.empty_like(self.state)   # the state at the step's start
 
     def to_internal(self, rows):
-        """Internal state of public rows (13, N), written into ``start``."""
+        """Return the internal state of public rows (13, N), written into ``start``."""
         z = self.start
         z[_SHIFT:] = rows[:ANGULAR_MOMENTUM.start]
         matrices = self._work.rotation(rows[ORIENTATION])
@@ -107,7 +109,7 @@ class BodyMomentum:
         return z
 
     def to_public(self, z):
-        """New public rows (13, N) of an internal state (orientation made unit first)."""
+        """Return new public rows (13, N) of an internal state (orientation made unit first)."""
         rows = np.empty_like(z)
         rows[:ANGULAR_MOMENTUM.start] = z[_SHIFT:]
         rotation.normalize_rows(rows[ORIENTATION], out=rows[ORIENTATION])

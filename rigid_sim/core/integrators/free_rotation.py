@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Exact torque-free motion of N rigid bodies (Jacobi elliptic functions, Carlson forms).
 
 Quaternions are scalar-last ``(x, y, z, w)`` and map principal body axes to world axes.
@@ -120,8 +122,11 @@ class TorqueFreeFlow:
         self._working_frames(s)
 
     def _working_frames(self, s):
-        """Tables over the four working frames of each body: major or minor axis 3, m1
-        flipped or not (index ``2 minor + flip``): frames, moments, quaternions, constants."""
+        """Tables over the four working frames of each body.
+
+        Major or minor axis 3, m1 flipped or not (index ``2 minor + flip``): frames, moments,
+        quaternions, constants.
+        """
         major = AXES[self._order]
         major[np.linalg.det(major) < 0.0, 0] *= -1.0
         minor = SWAP_MAJOR_MINOR @ major
@@ -133,7 +138,7 @@ class TorqueFreeFlow:
             self._shape = np.array([shape_constants(i) for i in self._working_moments])
 
     def __call__(self, m, q, dt):
-        """New body-axes ``m`` (N, 3) and unit ``q`` (N, 4) after ``dt`` from ``m``, ``q``."""
+        """Return body-axes ``m`` (N, 3) and unit ``q`` (N, 4) ``dt`` after ``m``, ``q``."""
         m_scale = np.max(np.abs(m), axis=1)
         time = dt * m_scale / self._i_scale
         moving = m_scale > 0.0
@@ -145,7 +150,7 @@ class TorqueFreeFlow:
         return self._masked(m, q, m_scale, time, moving)
 
     def _masked(self, m, q, m_scale, time, moving):
-        """The flow when some bodies are still, symmetric or spinning about axis 2."""
+        """Return the flow when some bodies are still, symmetric or spinning about axis 2."""
         m_new, q_new = m.copy(), q.copy()
         if np.any(moving):
             safe = np.where(moving, m_scale, 1.0)[:, None]
@@ -185,8 +190,11 @@ class TorqueFreeFlow:
         return self._symmetric | saddle, AXES[index], i_axis, i_perp
 
     def _asymmetric(self, bodies, m, time):
-        """Elliptic free motion of the asymmetric ``bodies`` (a slice or mask): new m (K, 3)
-        and body-frame rotation step (K, 4), from m (K, 3) in working units and time (K,)."""
+        """Elliptic free motion of the asymmetric ``bodies`` (a slice or mask).
+
+        New m (K, 3) and body-frame rotation step (K, 4), from m (K, 3) in working units and time
+        (K,).
+        """
         frames = self._frames[:, bodies]
         each = np.arange(len(m))
         # L^2 - 2 E I2 < 0: m circles the minor axis.

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Explicit Runge-Kutta methods with fixed steps, given as Butcher tableaux.
 
 A method is data: its tableau and the formulation it differentiates

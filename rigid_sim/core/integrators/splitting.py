@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Splitting methods: kick the momenta with the wrench, drift with the free motion.
 
 One Strang step of ``h`` is
@@ -43,14 +45,21 @@ def dlm_rotation(moments, body_l, orientation, h):
 
     Parameters
     ----------
-    moments : (N, 3) principal moments, kg m^2
-    body_l : (N, 3) angular momentum in principal axes
-    orientation : (N, 4) (x, y, z, w), principal axes to world
-    h : float, s
+    moments : (N, 3) float
+        Principal moments, kg m^2.
+    body_l : (N, 3) float
+        Angular momentum in principal axes, kg m^2/s.
+    orientation : (N, 4) float
+        Quaternions (x, y, z, w), principal axes to world.
+    h : float
+        Step, s.
 
     Returns
     -------
-    body_l : (N, 3), orientation : (N, 4)
+    body_l : (N, 3) float
+        Angular momentum in principal axes after ``h``.
+    orientation : (N, 4) float
+        Orientation after ``h``.
     """
     body_l, orientation = dlm_rotation_rows(np.asarray(moments).T, np.array(body_l).T,
                                             np.array(orientation).T, h)

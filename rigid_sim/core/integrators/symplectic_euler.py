@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Semi-implicit (symplectic) Euler: kick the momenta, then drift with the new velocities."""
 import numpy as np
 

@@ -1,0 +1,99 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Setting one body's pose or twist between steps, as a new packed state.
+
+A body's pose and twist are given as the node publishes them: the body frame's origin and
+orientation in the world, the velocity of that origin and the angular velocity, world axes.
+The packed Baraff state holds the centre of mass ``x`` and the momenta ``P``, ``L``, so the
+change goes through the centre-of-mass offset ``c`` (body frame) and the inertia:
+
+    x = o + R c,   P = M (v_o + omega x R c),   L = R I_body R^T omega.
+
+Setting the pose keeps the body's twist (origin velocity and angular velocity), setting the
+twist keeps its pose. Every other row of the state, and time, stay exactly as they were:
+the functions return a new array and never write into the one they are given.
+"""
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
+
+# |q.q - 1| above this is a quaternion nobody meant as a rotation (tf2 refuses the same);
+# within it, q is normalised, as a float32-rounded or hand-typed unit quaternion needs.
+UNIT_QUATERNION_TOLERANCE = 1.0e-2
+
+
+def _finite(name, value, size):
+    value = np.asarray(value, dtype=float)
+    if value.shape != (size,):
+        raise ValueError(f'{name} must have {size} components, got shape {value.shape}')
+    if not np.all(np.isfinite(value)):
+        raise ValueError(f'non-finite {name} {value.tolist()}')
+    return value
+
+
+def unit_quaternion(q):
+    """``q`` (x, y, z, w) normalised; ValueError if non-finite or too far from unit length."""
+    q = _finite('orientation', q, 4)
+    squared = float(q @ q)
+    if abs(squared - 1.0) > UNIT_QUATERNION_TOLERANCE:
+        raise ValueError(f'orientation {q.tolist()} is not a unit quaternion: |q|^2 = '
+                         f'{squared:.6g}, more than {UNIT_QUATERNION_TOLERANCE:g} from 1')
+    return q / np.sqrt(squared)
+
+
+def body_frame_state(bodies, y, index):
+    """Pose and twist of body ``index``'s frame in packed state ``y``.
+
+    Returns
+    -------
+    origin : (3,) m, world;  orientation : (4,) (x, y, z, w), body to world;
+    velocity : (3,) m/s of the origin, world;  angular_velocity : (3,) rad/s, world
+    """
+    row = y[index]
+    turn = Rotation.from_quat(row[ORIENTATION]).as_matrix()
+    offset = turn @ bodies.com_in_body[index]
+    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
+    angular_velocity = np.linalg.solve(inertia_world, row[ANGULAR_MOMENTUM])
+    velocity_com = row[LINEAR_MOMENTUM] / bodies.mass[index]
+    return (row[POSITION] - offset, row[ORIENTATION].copy(),
+            velocity_com - np.cross(angular_velocity, offset), angular_velocity)
+
+
+def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity):
+    """``y`` copied, with row ``index`` packed from the body frame's pose and twist."""
+    turn = Rotation.from_quat(orientation).as_matrix()
+    offset = turn @ bodies.com_in_body[index]
+    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
+    new = np.array(y, dtype=float, copy=True)
+    row = new[index]
+    row[POSITION] = origin + offset
+    row[ORIENTATION] = orientation
+    row[LINEAR_MOMENTUM] = bodies.mass[index] * (velocity + np.cross(angular_velocity, offset))
+    row[ANGULAR_MOMENTUM] = inertia_world @ angular_velocity
+    return new
+
+
+def with_pose(bodies, y, index, origin, orientation):
+    """A new state with body ``index``'s frame at ``origin`` (3,) m and ``orientation`` (4,).
+
+    The body keeps its twist (velocity of its frame origin and angular velocity, world
+    axes). ValueError, nothing changed, for a non-finite value or a quaternion further than
+    ``UNIT_QUATERNION_TOLERANCE`` from unit length (within it, it is normalised).
+    """
+    origin = _finite('position', origin, 3)
+    orientation = unit_quaternion(orientation)
+    _, _, velocity, angular_velocity = body_frame_state(bodies, y, index)
+    return _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
+
+
+def with_twist(bodies, y, index, velocity, angular_velocity):
+    """A new state with body ``index``'s frame origin moving at ``velocity`` (3,) m/s and
+    turning at ``angular_velocity`` (3,) rad/s, both world axes; its pose is kept.
+
+    ValueError, nothing changed, for a non-finite value.
+    """
+    velocity = _finite('linear velocity', velocity, 3)
+    angular_velocity = _finite('angular velocity', angular_velocity, 3)
+    origin, orientation, _, _ = body_frame_state(bodies, y, index)
+    return _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)

@@ -1,0 +1,65 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The node's /diagnostics: one status about once a second, over one window of ticks."""
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.clock import Clock, ClockType
+
+from rigid_sim import conversions
+from rigid_sim.diagnostics_window import TickStats, health, refusal_values, window_values
+
+PERIOD = 1.0  # s of wall time; /diagnostics aggregators expect about 1 Hz
+QUEUE_DEPTH = 10
+
+
+class DiagnosticsOutput:
+    """Publishes the health of the simulation and collects the tick times between two.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Owns the publisher; its name is the status name.
+    publish : callable
+        Called without arguments once per ``PERIOD``: the node's report, which calls
+        :meth:`publish`.
+    sim_time : float, s, when the first window starts
+    """
+
+    def __init__(self, node, publish, sim_time):
+        self._node = node
+        self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', QUEUE_DEPTH)
+        self.stats = TickStats(sim_time)
+        node.create_timer(PERIOD, publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def restart(self, sim_time):
+        """Start a new window at ``sim_time`` (after a reset or a new scene)."""
+        self.stats = TickStats(sim_time)
+
+    def publish(self, world, settings, paused, refusals, dropped):
+        """Publish the window's status and start a new window.
+
+        Parameters
+        ----------
+        world : rigid_sim.core.world.World
+            The world whose time, energy and safeguard counts are reported.
+        settings : rigid_sim.parameters.Settings
+            The node's settings (integrator, rate, time step).
+        paused : bool
+            Whether integration is paused.
+        refusals : rigid_sim.inputs.Refusals
+            Refused inputs per body and the last reason.
+        dropped : int
+            Ticks given up behind wall time in the window.
+        """
+        target = settings.real_time_factor
+        values = {'simulated time [s]': world.time, 'paused': paused,
+                  'integrator': settings.integrator,
+                  **window_values(self.stats, world,
+                                  'none (rate 0: as fast as possible)' if target is None
+                                  else target),
+                  'ticks dropped behind wall time': dropped,
+                  **refusal_values(refusals.counts, refusals.last)}
+        period = 1.0 / settings.rate if settings.rate > 0.0 else None
+        level, summary = health(self.stats, period, dropped)
+        self._publisher.publish(conversions.diagnostics(
+            f'{self._node.get_name()}: physics', world.time, level, summary, values))
+        self.restart(world.time)

@@ -1,0 +1,67 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The node's IMU output: ``~/<body>/imu`` for every body whose scene entry declares one.
+
+A scene without an IMU gets no publisher and costs one attribute test per tick. The
+readings are taken whenever an IMU is due, listened to or not, so that the noise an IMU
+draws does not depend on who subscribes: a seeded run reads the same whoever watches.
+"""
+from sensor_msgs.msg import Imu
+
+from rigid_sim import conversions
+from rigid_sim.core.imu import build_imus
+
+QUEUE_DEPTH = 10
+
+
+class ImuOutputs:
+    """The IMUs of one scene and their publishers.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Creates and destroys the publishers.
+    scene : rigid_sim.core.scene.Scene
+    world : rigid_sim.core.world.World of that scene
+    frame_prefix : str, prefixed to the IMU frames
+    """
+
+    def __init__(self, node, scene, world, frame_prefix):
+        self._node = node
+        self.imus = None          # rigid_sim.core.imu.Imus, None when the scene has none
+        self._publishers = []     # per IMU
+        self._messages = []       # per IMU, refilled at each reading
+        self.wire(scene, world, frame_prefix)
+
+    def wire(self, scene, world, frame_prefix):
+        """Replace the IMUs and publishers by those of ``scene``."""
+        for publisher in self._publishers:
+            self._node.destroy_publisher(publisher)
+        gravity = scene.effects.get('gravity', {}).get('acceleration')
+        self.imus = build_imus(scene.bodies, world.bodies, gravity)
+        if self.imus is None:
+            self._publishers, self._messages = [], []
+            return
+        names = [scene.bodies[index].name for index in self.imus.bodies]
+        self._publishers = [self._node.create_publisher(Imu, f'~/{name}/imu', QUEUE_DEPTH)
+                            for name in names]
+        self._messages = [conversions.imu_message(f'{frame_prefix}{name}/{spec.frame}', spec)
+                          for name, spec in zip(names, self.imus.specs)]
+
+    def restart(self):
+        """Every IMU due again and its noise drawn anew from its seed (time went back to 0)."""
+        if self.imus is not None:
+            self.imus.restart()
+
+    def publish(self, world):
+        """Read and publish every IMU that is due at the world's time."""
+        if self.imus is None:
+            return
+        which = self.imus.due(world.time)
+        if not which:
+            return
+        readings = self.imus.read(world, which)
+        for row, k in enumerate(which):
+            message = self._messages[k]
+            conversions.fill_imu(message, readings, row)
+            self._publishers[k].publish(message)

@@ -1,0 +1,157 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The node's body inputs: messages stored on arrival, applied to the world at the tick.
+
+Subscription callbacks only store messages, so a callback never touches the world while
+it steps; :meth:`BodyInputs.apply` is run by the tick, in arrival order. A refused message
+changes nothing: it is counted per body, and the last reason is kept for /diagnostics.
+
+Every subscription costs the executor time on each of its rounds, whether messages come or
+not (docs/performance.md), so ``set_pose`` and ``set_twist``, which most runs never use,
+are subscribed to only once a publisher on the topic appears in the graph: looked for
+every ``DEMAND_REFRESH`` seconds of wall time.
+"""
+import math
+
+from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
+from rclpy.clock import Clock, ClockType
+
+from rigid_sim import conversions
+from rigid_sim.core.body_state import with_pose, with_twist
+from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.scene import wrench_target
+
+QUEUE_DEPTH = 10
+WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
+DEMAND_REFRESH = 0.5  # s of wall time between two looks for new set_pose/set_twist publishers
+STATE_TOPICS = (('set_pose', PoseStamped), ('set_twist', TwistStamped))
+
+
+def held_wrenches(world):
+    """Return the world's held wrenches (``hold``, ``release``, ``check``): the only way in."""
+    return world.effect(AppliedWrenches)
+
+
+class Refusals:
+    """Refused input messages: a count per body and the last reason."""
+
+    def __init__(self, names):
+        self.counts = {name: 0 for name in names}
+        self.last = ''
+
+    def add(self, name, topic, error, logger):
+        """Count one refused message on ``~/<name>/<topic>`` and warn, throttled."""
+        self.counts[name] += 1
+        self.last = f'~/{name}/{topic}: {error}'
+        logger.warning(f'refused a {topic} on {self.last}', throttle_duration_sec=WARNING_PERIOD)
+
+
+def _world_axes(message, topic, world_frame):
+    """ValueError unless a set_pose/set_twist ``message`` is given in ``world_frame``."""
+    if message.header.frame_id != world_frame:
+        raise ValueError(f'unknown frame_id {message.header.frame_id!r}: {topic} is given in '
+                         f'the world frame; valid: [{world_frame!r}]')
+
+
+class BodyInputs:
+    """The input subscriptions of one scene and the messages received since the last tick.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Creates and destroys the subscriptions; its logger warns about refusals.
+    scene : rigid_sim.core.scene.Scene
+    """
+
+    def __init__(self, node, scene):
+        self._node = node
+        self._subscriptions = []
+        self._awaited = {}         # resolved topic name -> (topic, body index), not subscribed
+        self._inbox = []           # (topic, body index, message) in arrival order
+        self._names = []           # body names of the scene, in scene order
+        self.refusals = Refusals(())
+        self._appliers = {'wrench': self._hold, 'set_pose': self._set_pose,
+                          'set_twist': self._set_twist}
+        self.wire(scene)
+        node.create_timer(DEMAND_REFRESH, self.subscribe_on_demand,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def wire(self, scene):
+        """Subscribe to the wrench topic of every body of ``scene`` that takes wrenches."""
+        for subscription in self._subscriptions:
+            self._node.destroy_subscription(subscription)
+        self._subscriptions = [self._subscribe(WrenchStamped, 'wrench', index, body.name)
+                               for index, body in enumerate(scene.bodies) if body.wrench_input]
+        self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/{topic}'): (topic, index)
+                         for index, body in enumerate(scene.bodies) for topic, _ in STATE_TOPICS}
+        self._names = [body.name for body in scene.bodies]
+        self._inbox.clear()
+        self.refusals = Refusals(self._names)
+
+    def _subscribe(self, kind, topic, index, name):
+        return self._node.create_subscription(
+            kind, f'~/{name}/{topic}',
+            lambda message: self._inbox.append((topic, index, message)), QUEUE_DEPTH)
+
+    def subscribe_on_demand(self):
+        """Subscribe to every set_pose and set_twist topic that has appeared in the graph."""
+        if not self._awaited:
+            return
+        present = {name for name, _ in self._node.get_topic_names_and_types()}
+        kinds = dict(STATE_TOPICS)
+        for name in present & self._awaited.keys():
+            topic, index = self._awaited.pop(name)
+            self._subscriptions.append(self._subscribe(kinds[topic], topic, index,
+                                                       self._names[index]))
+
+    @property
+    def pending(self):
+        """Return the number of received messages the next tick will apply."""
+        return len(self._inbox)
+
+    def clear(self):
+        """Forget every message not applied yet."""
+        self._inbox.clear()
+
+    def apply(self, world, scene, settings):
+        """Apply every stored message in arrival order; a refused one changes nothing.
+
+        Parameters
+        ----------
+        world : rigid_sim.core.world.World
+            The world that holds the wrenches.
+        scene : rigid_sim.core.scene.Scene
+            The world's scene (frames and points).
+        settings : rigid_sim.parameters.Settings
+            ``world_frame`` and ``wrench_timeout`` are read.
+        """
+        inbox, self._inbox = self._inbox, []
+        for topic, index, message in inbox:
+            try:
+                self._appliers[topic](world, scene.bodies[index], index, message, settings)
+            except ValueError as error:
+                self.refusals.add(scene.bodies[index].name, topic, error,
+                                  self._node.get_logger())
+
+    @staticmethod
+    def _hold(world, body, index, message, settings):
+        frame, point = wrench_target(body, message.header.frame_id, settings.world_frame)
+        force, torque = conversions.wrench_arrays(message)
+        timeout = settings.wrench_timeout
+        expires = world.time + timeout if timeout > 0.0 else math.inf
+        held_wrenches(world).hold(index, message.header.frame_id, frame, force, torque, point,
+                                  expires)
+
+    @staticmethod
+    def _set_pose(world, body, index, message, settings):
+        _world_axes(message, 'set_pose', settings.world_frame)
+        origin, orientation = conversions.pose_arrays(message.pose)
+        world.y = with_pose(world.bodies, world.y, index, origin, orientation)
+
+    @staticmethod
+    def _set_twist(world, body, index, message, settings):
+        _world_axes(message, 'set_twist', settings.world_frame)
+        twist = message.twist
+        world.y = with_twist(world.bodies, world.y, index,
+                             conversions.vector_array(twist.linear),
+                             conversions.vector_array(twist.angular))

@@ -1,0 +1,107 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The node's state outputs: per-body publishers, who listens to them, what they send.
+
+Outputs nobody subscribes to are neither filled nor sent. Who listens is asked again every
+``LISTENER_REFRESH`` seconds of wall time, not on every tick, because asking costs about a
+microsecond and a half per topic.
+"""
+import math
+import time
+
+from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.event_handler import PublisherEventCallbacks
+from visualization_msgs.msg import MarkerArray
+
+from rigid_sim import conversions
+
+# A new subscriber waits at most this long (s of wall time) on top of discovery, which
+# takes longer than this between processes anyway.
+LISTENER_REFRESH = 0.5
+QUEUE_DEPTH = 10
+# Per-body publishers go without rclpy's default QoS event handlers (which only log an
+# incompatible-QoS warning): each is a waitable that the executor collects again on every
+# spin, which with thousands of bodies costs more than the physics (docs/performance.md).
+NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
+BODY_TOPICS = ((PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom'))
+
+
+class StateOutputs:
+    """Pose, twist and odometry per body, the PoseArray and the markers of one scene.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Creates and destroys the publishers.
+    scene : rigid_sim.core.scene.Scene
+    world_frame : str
+        frame_id of every published pose.
+    """
+
+    def __init__(self, node, scene, world_frame):
+        self._node = node
+        self._pose_array = node.create_publisher(PoseArray, '~/poses', QUEUE_DEPTH)
+        self._markers = node.create_publisher(MarkerArray, '~/markers', QUEUE_DEPTH)
+        self._bodies = []            # per body: its publishers, in BODY_TOPICS order
+        self._messages = None        # conversions.StateMessages of the scene
+        self._listened = []          # per body: a bool per publisher
+        self._listened_bodies = []   # indices of bodies with any subscriber
+        self._moving_bodies = []     # indices of bodies whose twist or odometry is heard
+        self._aggregates = []        # PoseArray and marker publishers with subscribers
+        self._listeners_due = -math.inf
+        self.wire(scene, world_frame)
+
+    def wire(self, scene, world_frame):
+        """Replace the per-body publishers and messages by those of ``scene``."""
+        for publishers in self._bodies:
+            for publisher in publishers:
+                self._node.destroy_publisher(publisher)
+        self._bodies = [[self._node.create_publisher(kind, f'~/{body.name}/{topic}',
+                                                     QUEUE_DEPTH, event_callbacks=NO_EVENTS)
+                         for kind, topic in BODY_TOPICS]
+                        for body in scene.bodies]
+        self.set_frame(scene, world_frame)
+        self._listeners_due = -math.inf
+
+    def set_frame(self, scene, world_frame):
+        """Rebuild the reused messages of ``scene`` for a new ``world_frame``."""
+        self._messages = conversions.StateMessages(scene.bodies, world_frame)
+
+    def refresh_listeners(self):
+        """Ask who listens at the next publication (lockstep clients want every tick)."""
+        self._listeners_due = -math.inf
+
+    def publish(self, world):
+        """Fill and send every output of ``world``'s current state that has subscribers."""
+        now = time.monotonic()
+        if now >= self._listeners_due:
+            self._listeners_due = now + LISTENER_REFRESH
+            self._find_listeners()
+        listened = self._listened_bodies
+        if not (listened or self._aggregates):
+            return
+        # The PoseArray and the markers share every body's Pose; twists only where heard.
+        posed = range(len(self._bodies)) if self._aggregates else listened
+        messages = self._messages
+        messages.fill(world.snapshot(), posed, self._moving_bodies)
+        for index in listened:
+            sent = (messages.poses[index], messages.twists[index], messages.odometry[index])
+            for publisher, wanted, message in zip(self._bodies[index], self._listened[index],
+                                                  sent):
+                if wanted:
+                    publisher.publish(message)
+        for publisher in self._aggregates:
+            publisher.publish(messages.pose_array if publisher is self._pose_array
+                              else messages.markers)
+
+    def _find_listeners(self):
+        """Which outputs have subscribers: per body (pose, twist, odometry) and aggregates."""
+        self._listened = [[publisher.get_subscription_count() > 0 for publisher in publishers]
+                          for publishers in self._bodies]
+        self._listened_bodies = [index for index, wanted in enumerate(self._listened)
+                                 if any(wanted)]
+        self._moving_bodies = [index for index, (_, twist, odometry) in enumerate(self._listened)
+                               if twist or odometry]
+        self._aggregates = [publisher for publisher in (self._pose_array, self._markers)
+                            if publisher.get_subscription_count() > 0]

@@ -1,0 +1,195 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The IMU: oracles from rigid-body kinematics, noise statistics, and the topic over ROS.
+
+Specific force is what an accelerometer measures, f = a - g at its point, in its axes;
+the oracles: free fall reads 0, a body held up by m g reads +g along world up, a spin
+omega about a principal axis reads omega^2 r towards the axis at distance r, a torque tau
+on a body at rest reads alpha x r with alpha = I^-1 tau.
+"""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+from sensor_msgs.msg import Imu
+
+from rigid_sim import conversions
+from rigid_sim.core.imu import build_imus
+from rigid_sim.core.scene import SceneError, build_world, parse_scene
+from rigid_sim.inputs import held_wrenches
+from ros_harness import spin_until
+
+G = np.array([0.0, 0.0, -9.81])   # m/s^2
+MASS, SIZE = 2.0, np.array([0.4, 0.2, 0.1])
+BOX_INERTIA = MASS / 12 * np.array([SIZE[1] ** 2 + SIZE[2] ** 2, SIZE[0] ** 2 + SIZE[2] ** 2,
+                                    SIZE[0] ** 2 + SIZE[1] ** 2])
+TILT = Rotation.from_rotvec([0.4, -0.7, 1.1])
+OFFSET = np.array([0.15, -0.05, 0.02])   # m, body frame: the IMU's point, off the centre
+
+
+def scene(imu='{point: [0.15, -0.05, 0.02]}', gravity=True, twist='{}', extra=''):
+    effects = f'effects: {{gravity: {{acceleration: {G.tolist()}}}}}\n' if gravity else ''
+    return parse_scene(yaml.safe_load(f"""
+{effects}bodies:
+  - name: box
+    shape: {{type: box, size: {SIZE.tolist()}}}
+    mass: {MASS}
+    pose: {{position: [0.0, 0.0, 1.0], orientation: {TILT.as_quat().tolist()}}}
+    twist: {twist}
+    imu: {imu}
+{extra}"""))
+
+
+def read(scene, steps=0, dt=1e-3, hold=None):
+    world = build_world(scene, 'rk4')
+    if hold is not None:
+        held_wrenches(world).hold(0, 'test', *hold)
+    for _ in range(steps):
+        assert world.step(dt)
+    imus = build_imus(scene.bodies, world.bodies, scene.effects.get('gravity', {}).get(
+        'acceleration'))
+    return world, imus.read(world, imus.due(world.time))
+
+
+def test_free_fall_reads_no_specific_force_and_no_rotation():
+    world, readings = read(scene(), steps=50)
+    np.testing.assert_allclose(readings.specific_force[0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(readings.angular_velocity[0], 0.0, atol=1e-15)
+    np.testing.assert_allclose(readings.orientation[0], world.y[0, 3:7])
+
+
+def test_body_held_up_by_its_weight_reads_g_along_world_up_in_its_own_axes():
+    """F = -M g at the centre of mass: a = 0, so f = -g = (0, 0, 9.81) world, R^T of it."""
+    world, readings = read(scene(), steps=20, hold=('world', -MASS * G, np.zeros(3), None))
+    up_in_body = TILT.inv().apply([0.0, 0.0, 9.81])
+    np.testing.assert_allclose(readings.specific_force[0], up_in_body, atol=1e-12)
+
+
+def test_spin_about_a_principal_axis_reads_centripetal_towards_the_axis():
+    """omega = 5 rad/s about body z, IMU at r = (0.15, -0.05, 0.02): f = -omega^2 (x, y, 0),
+    the gyro reads (0, 0, 5) in body axes, at any time of the steady spin."""
+    omega = 5.0
+    spin = TILT.apply([0.0, 0.0, omega]).tolist()
+    _, readings = read(scene(gravity=False, twist=f'{{angular: {spin}}}'), steps=37)
+    np.testing.assert_allclose(readings.angular_velocity[0], [0.0, 0.0, omega], atol=1e-12)
+    np.testing.assert_allclose(readings.specific_force[0],
+                               -omega ** 2 * np.array([OFFSET[0], OFFSET[1], 0.0]), atol=1e-11)
+
+
+def test_torque_on_a_body_at_rest_reads_the_tangential_alpha_cross_r():
+    """Body torque tau at rest: alpha = I^-1 tau (no omega yet), f = alpha x r, gyro 0."""
+    torque = np.array([0.02, -0.05, 0.01])
+    _, readings = read(scene(gravity=False),
+                       hold=('body', np.zeros(3), torque, None))
+    alpha = torque / BOX_INERTIA
+    np.testing.assert_allclose(readings.specific_force[0], np.cross(alpha, OFFSET), atol=1e-13)
+    np.testing.assert_allclose(readings.angular_velocity[0], 0.0, atol=0)
+
+
+def test_named_point_and_readings_on_the_imu_grid_of_simulated_time():
+    """An IMU at a named point, 25 Hz, ticked at 1/64 s: it reads at the first tick at or
+    after each multiple of 0.04 s (t = 0, 3/64, 6/64, 8/64, ...), not at every tick."""
+    spec = scene('{point: tip, rate: 25.0}', extra='    points: {tip: [0.2, 0.0, 0.0]}')
+    world = build_world(spec, 'rk4')
+    imus = build_imus(spec.bodies, world.bodies, None)
+    assert imus.specs[0].frame == 'tip'
+    read_at = [k for k in range(20) if imus.due(k / 64)]
+    expected = sorted({math.ceil(n * 0.04 * 64 - 1e-9) for n in range(20)
+                       if n * 0.04 < 20 / 64})
+    assert read_at == expected
+
+
+NOISY = ('{point: [0.0, 0.0, 0.0], seed: %d, noise: {gyro: {stddev: 0.01, bias_mean: 0.2, '
+         'bias_stddev: 0.0}, accel: {stddev: 0.0, dynamic_bias_stddev: 0.3}}}')
+
+
+def noisy_readings(seed, count, dt):
+    """``count`` readings at intervals ``dt`` of a body at rest, no gravity: exact is 0."""
+    spec = scene(NOISY % seed, gravity=False)
+    world = build_world(spec, 'rk4')
+    imus = build_imus(spec.bodies, world.bodies, None)
+    gyro, accel = [], []
+    for k in range(count):
+        at = SimpleNamespace(y=world.y, time=k * dt, net_wrench=world.net_wrench)
+        readings = imus.read(at, [0])
+        gyro.append(readings.angular_velocity[0].copy())
+        accel.append(readings.specific_force[0].copy())
+    return np.array(gyro), np.array(accel)
+
+
+def test_white_noise_has_its_mean_and_standard_deviation_within_sampling_bounds():
+    """4000 x 3 gyro samples of N(0.2, 0.01^2): the mean within 5 standard errors of 0.2,
+    the sample standard deviation within 5 of its standard errors (sigma / sqrt(2 n))."""
+    gyro, _ = noisy_readings(seed=1, count=4000, dt=0.01)
+    n = gyro.size
+    assert abs(gyro.mean() - 0.2) < 5 * 0.01 / math.sqrt(n)
+    assert abs(gyro.std(ddof=1) - 0.01) < 5 * 0.01 / math.sqrt(2 * n)
+
+
+def test_bias_random_walk_grows_as_sigma_squared_t():
+    """A random walk of density 0.3 / sqrt(s): across 200 seeds x 3 axes the variance of
+    the bias at t is 0.09 t, within 5 standard errors (chi-square: var sqrt(2 / n))."""
+    runs = np.array([noisy_readings(seed, count=41, dt=0.05)[1] for seed in range(200)])
+    for k, t in ((10, 0.5), (40, 2.0)):
+        values = runs[:, k].ravel()
+        expected = 0.09 * t
+        assert abs(values.var() - expected) < 5 * expected * math.sqrt(2 / values.size)
+        assert abs(values.mean()) < 5 * math.sqrt(expected / values.size)
+
+
+def test_same_seed_same_noise_other_seed_other_noise():
+    first, second = noisy_readings(7, 30, 0.01), noisy_readings(7, 30, 0.01)
+    np.testing.assert_array_equal(first[0], second[0])
+    np.testing.assert_array_equal(first[1], second[1])
+    assert not np.array_equal(first[0], noisy_readings(8, 30, 0.01)[0])
+
+
+@pytest.mark.parametrize('imu, key, reason', [
+    ('{point: nowhere}', 'bodies[0].imu.point', "no point named 'nowhere'"),
+    ('{rate: -1.0}', 'bodies[0].imu.rate', 'positive'),
+    ('{seed: -3}', 'bodies[0].imu.seed', '>= 0'),
+    ('{noise: {gyro: {stdev: 0.1}}}', 'bodies[0].imu.noise.gyro.stdev', 'unknown key'),
+    ('{noise: {accel: {stddev: -0.1}}}', 'bodies[0].imu.noise.accel.stddev', 'non-negative'),
+])
+def test_bad_imu_entries_are_refused_naming_the_key(imu, key, reason):
+    with pytest.raises(SceneError) as refused:
+        scene(imu)
+    assert refused.value.key == key and reason in refused.value.reason
+
+
+def test_imu_topic_over_ros(harness, write_scene):
+    """~/box/imu: frame box/imu, stamps of simulated time, covariances from the noise model,
+    and a body held up by m g reading +g along world up (every tick: no rate given)."""
+    text = f"""
+effects: {{gravity: {{acceleration: {G.tolist()}}}}}
+bodies:
+  - name: box
+    shape: {{type: box, size: {SIZE.tolist()}}}
+    mass: {MASS}
+    pose: {{orientation: {TILT.as_quat().tolist()}}}
+    imu: {{point: {OFFSET.tolist()}, noise: {{gyro: {{stddev: 0.5}}}}}}
+  - name: plain
+    shape: {{type: sphere, radius: 0.1}}
+    mass: 1.0
+"""
+    sim = harness(write_scene(text), time_step=1 / 64, wrench_timeout=0.0)
+    readings = []
+    sim.probe.create_subscription(Imu, sim.topic('box/imu'), readings.append, 100)
+    spin_until(sim.executor, lambda: sim.sim.count_subscribers(sim.topic('box/imu')) >= 1)
+    assert sim.sim.count_publishers(sim.topic('plain/imu')) == 0
+    sim.push('box', 'world', -MASS * G)
+    sim.tick(3)
+    spin_until(sim.executor, lambda: len(readings) == 3, what='three IMU readings')
+    assert [conversions.to_seconds(m.header.stamp) for m in readings] == [1 / 64, 2 / 64, 3 / 64]
+    last = readings[-1]
+    assert last.header.frame_id == 'box/imu'
+    np.testing.assert_allclose(conversions.vector_array(last.linear_acceleration),
+                               TILT.inv().apply([0.0, 0.0, 9.81]), atol=1e-12)
+    np.testing.assert_array_equal(last.angular_velocity_covariance,
+                                  np.diag([0.25] * 3).ravel())
+    np.testing.assert_array_equal(last.linear_acceleration_covariance, 0.0)
+    np.testing.assert_allclose([last.orientation.x, last.orientation.y, last.orientation.z,
+                                last.orientation.w], TILT.as_quat(), atol=1e-15)

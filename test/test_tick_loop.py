@@ -1,0 +1,123 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The fixed-rate loop: simulated time locked to wall time, catch-up, overrun reported.
+
+The loop reads the wall clock through ``monotonic``; here a fake clock stands in for
+it, so the schedule is checked exactly, without waiting: tick k is due k / rate seconds
+after the first, and after any sequence of late wake-ups the loop has run every tick due.
+"""
+import math
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+
+from rigid_sim import tick_loop
+from rigid_sim.tick_loop import MAX_LAG, TickLoop
+
+RATE = 1000.0  # Hz
+
+
+class FakeClock:
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+class FakeTimer:
+    def __init__(self, callback):
+        self.callback = callback
+        self.canceled = False
+
+    def cancel(self):
+        self.canceled = True
+
+    def reset(self):
+        self.canceled = False
+
+    def is_canceled(self):
+        return self.canceled
+
+
+class FakeNode:
+    def create_timer(self, period, callback, clock):
+        self.timer = FakeTimer(callback)
+        return self.timer
+
+
+@pytest.fixture
+def clock(monkeypatch):
+    fake = FakeClock()
+    monkeypatch.setattr(tick_loop, 'monotonic', fake)
+    return fake
+
+
+def make_loop(rate=RATE):
+    ticks = []
+    node = FakeNode()
+    loop = TickLoop(node, lambda: ticks.append(None), rate)
+    return loop, node.timer.callback, ticks
+
+
+def test_late_wake_ups_are_caught_up_so_ticks_follow_wall_time(clock):
+    """Wake-ups at jittered times up to 20 periods late: after each, the ticks run equal
+    the ticks due, floor(elapsed x rate) + 1, so simulated time never drifts."""
+    start = clock.now + 1.0 / RATE   # the first tick is due one period after the start
+    loop, wake, ticks = make_loop()
+    rng = np.random.default_rng(5)
+    for late in rng.uniform(0.0, 20.0 / RATE, size=500).cumsum():
+        clock.now = start + late
+        wake()
+        assert len(ticks) == math.floor(late * RATE) + 1
+    assert loop.take_dropped() == 0
+
+
+def test_an_early_or_repeated_wake_up_runs_no_tick_twice(clock):
+    """Two wake-ups within one period run the due tick once."""
+    loop, wake, ticks = make_loop()
+    clock.now += 1.5 / RATE
+    wake()
+    wake()
+    assert len(ticks) == 1
+
+
+def test_falling_behind_by_more_than_the_bound_gives_ticks_up_and_counts_them(clock):
+    """A stall of 0.5 s at 1 kHz (beyond MAX_LAG): one tick runs, the other 500 owed are
+    given up and counted once; the schedule then restarts from that moment."""
+    assert MAX_LAG < 0.5
+    loop, wake, ticks = make_loop()
+    clock.now += 1.0 / RATE + 0.5
+    wake()
+    assert len(ticks) == 1
+    assert loop.take_dropped() == 500
+    assert loop.take_dropped() == 0
+    clock.now += 3.0 / RATE
+    wake()
+    assert len(ticks) == 4
+
+
+def test_rate_zero_runs_ticks_on_every_wake_up_and_stands_still_while_paused(clock):
+    """Without a wall rate every wake-up runs at least one tick; paused, the timer stops."""
+    loop, wake, ticks = make_loop(rate=0.0)
+    wake()
+    assert len(ticks) >= 1
+    loop.set_paused(True)
+    assert loop.timer.is_canceled()
+    loop.set_paused(False)
+    assert not loop.timer.is_canceled()
+
+
+def test_node_reports_given_up_ticks_on_diagnostics(harness, write_scene, clock):
+    """Over ROS: a node at 1 kHz whose wall clock jumps 2 s reports WARN and the count."""
+    sim = harness(write_scene('bodies:\n  - {name: b, shape: {type: sphere, radius: 0.1}, '
+                              'mass: 1.0}\n'), ticking=True, rate=RATE)
+    clock.now += 2.0
+    sim.executor.spin_once(timeout_sec=0.1)
+    while sim.sim.ticks == 0:
+        sim.executor.spin_once(timeout_sec=0.1)
+    values = sim.diagnostics()
+    assert int(values['ticks dropped behind wall time']) >= 1900
+    status = sim.latest('/diagnostics').status[0]
+    assert status.level == DiagnosticStatus.WARN and 'fell behind' in status.message
