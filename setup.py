@@ -49,7 +49,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'rigid_sim_node = rigid_sim.main:main',
+            'rigid_sim_node = rigid_sim.main:executable',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
         ],
     },

@@ -14,7 +14,7 @@ HUNT = os.environ.get('RIGID_SIM_FUZZ_EXAMPLES')
 
 
 def fuzz(examples):
-    """Settings for a fuzz test of ``examples`` examples in CI (no deadline: CI is noisy)."""
+    """Return the settings of a fuzz test of ``examples`` examples in CI (no deadline)."""
     return settings(max_examples=int(HUNT) if HUNT else examples, deadline=None,
                     derandomize=not HUNT, database=None,
                     # One node serves every example of a test: that it survives them all is

@@ -43,8 +43,11 @@ ACTIONS = st.lists(st.one_of(WRENCHES, st.tuples(st.just('pause'), st.booleans()
 
 
 def acceptable(body, frame_id, force, torque):
-    """Whether the contract lets this wrench act: a frame of the body, finite, no subnormal
-    component, within the scene's limits."""
+    """Return whether the contract lets this wrench act.
+
+    It must name a frame of the body, be finite, have no subnormal component and be within
+    the scene's limits.
+    """
     values = np.array(force + torque)
     subnormal = np.any((values != 0.0) & (np.abs(values) < np.finfo(float).tiny))
     return (frame_id in VALID_FRAMES[body] and bool(np.all(np.isfinite(values)))
@@ -53,14 +56,14 @@ def acceptable(body, frame_id, force, torque):
 
 
 def started(harness, write_scene):
-    """The one node of this test, started at its first example (the fixture spans them)."""
+    """Return the one node of this test, started at its first example."""
     if not hasattr(harness, 'sim'):
         harness.sim = harness(write_scene(SCENE), time_step=0.125)
     return harness.sim
 
 
 def assert_alive_and_finite(sim):
-    """A tick goes through and everything the node holds and publishes is finite."""
+    """Check that a tick goes through and all the node holds and publishes is finite."""
     before = sim.sim.world.time
     sim.tick()
     assert np.all(np.isfinite(sim.sim.world.y)) and math.isfinite(sim.sim.world.energy())
@@ -77,12 +80,12 @@ def test_garbage_on_every_input_is_applied_or_refused_with_a_reason(harness, wri
     for action in actions:
         if action[0] == 'wrench':
             _, body, frame_id, force, torque = action
-            refused = dict(sim.sim.refused)
+            refused = dict(sim.sim.inputs.refusals.counts)
             sim.push(body, frame_id, force, torque)
             sim.tick()
-            now_refused = sim.sim.refused[body] - refused[body]
+            now_refused = sim.sim.inputs.refusals.counts[body] - refused[body]
             assert now_refused == (0 if acceptable(body, frame_id, force, torque) else 1), \
-                sim.sim._last_refusal
+                sim.sim.inputs.refusals.last
             if now_refused:
                 reason = sim.diagnostics()['last refused input']
                 assert reason.startswith(f'~/{body}/wrench: ') and len(reason) < 1000

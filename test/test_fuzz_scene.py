@@ -161,8 +161,10 @@ def test_any_nesting_is_refused_or_loaded_without_recursing(tmp_path, depth, flo
 @FUZZ
 @given(fanout=st.integers(2, 40), levels=st.integers(1, 12))
 def test_alias_bombs_of_any_shape_are_refused_or_small(tmp_path, fanout, levels):
-    """Aliases of aliases: refused when their expansion passes the node limit, else loaded
-    (and refused as no scene), in either case without expanding."""
+    """Refuse aliases of aliases past the node limit, and never expand them.
+
+    Smaller ones load, and are then refused as no scene.
+    """
     lines = [f'l0: &l0 [{", ".join(["x"] * fanout)}]']
     lines += [f'l{i}: &l{i} [{", ".join([f"*l{i - 1}"] * fanout)}]' for i in range(1, levels)]
     path = tmp_path / 'bomb.yaml'

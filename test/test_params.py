@@ -161,7 +161,7 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
 HOSTILE = [
     ('world_frame', 'bad frame!', 'no frame name'), ('world_frame', 'w' * 100_000, 'no frame'),
     ('time_step', 1e-300, 'outside the range'), ('substeps', 10_000, 'outside the range'),
-    ('rate', 1e-300, 'outside the range'), ('publish_rate', 1e-300, 'outside the range'),
+    ('rate', 1e-300, 'at least 0.001 Hz'), ('publish_rate', 1e-300, 'outside the range'),
     ('tolerance', 1e-300, 'outside the range'), ('scene', 's' * 100_000, 'no file path'),
     ('scene', 'a\0b', 'no file path'), ('integrator', 'x' * 100_000, 'unknown integrator')]
 
@@ -218,8 +218,11 @@ def test_runtime_changes_take_effect(harness, write_scene):
 
 def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
         harness, write_scene, tmp_path):
-    """Each of these once stopped the node (RecursionError, a 1e12-sample array, a read of
-    /dev/zero); now each is refused naming the file, and the old scene runs on."""
+    """Refuse each hostile scene naming the file, and run the old scene on.
+
+    Each of these once stopped the node: a RecursionError, a 1e12-sample array, a read of
+    /dev/zero.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     sampled = SCENE.replace('mass: 2.0', 'mass: 2.0\n    inertia: {method: sampling, '
                                          'samples: 1000000000000}')
