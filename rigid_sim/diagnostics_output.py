@@ -57,7 +57,7 @@ class DiagnosticsOutput:
                                   'none (rate 0: as fast as possible)' if target is None
                                   else target),
                   'ticks dropped behind wall time': dropped,
-                  **refusal_values(refusals.counts, refusals.last)}
+                  **refusal_values(refusals.counts, refusals.last, refusals.superseded)}
         period = 1.0 / settings.rate if settings.rate > 0.0 else None
         level, summary = health(self.stats, period, dropped)
         self._publisher.publish(conversions.diagnostics(

@@ -58,11 +58,16 @@ def window_values(stats, world, target_real_time_factor):
         'last step failure': safeguards.last_failure}
 
 
-def refusal_values(refused, last_refusal):
-    """Key -> value of refused inputs: the total, per body, and the last reason."""
+def refusal_values(refused, last_refusal, superseded):
+    """Return the key -> value of refused and superseded inputs.
+
+    Refused: the total, per body, and the last reason; superseded by a newer message before
+    a tick: the total.
+    """
     return {'refused inputs': sum(refused.values()),
             **{f'refused inputs {name}': count for name, count in refused.items()},
-            'last refused input': last_refusal}
+            'last refused input': last_refusal,
+            'superseded inputs': sum(superseded.values())}
 
 
 def health(stats, tick_period, dropped=0):

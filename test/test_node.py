@@ -138,6 +138,24 @@ def test_wrenches_from_two_frames_add_and_same_frame_replaces(box):
     np.testing.assert_allclose(velocity, expected[1], atol=1e-12)
 
 
+def test_a_flood_within_one_tick_applies_only_the_newest_per_frame_and_counts_the_rest(box):
+    """Apply only the newest of five 'world' and two '' pushes sent before one tick.
+
+    Their sum over M accelerates the box; the other five are superseded, not refused.
+    """
+    for force in ([50.0, 0, 0], [0, 50.0, 0], [0, 0, 50.0], [-50.0, 0, 0], [1.0, 0, 0]):
+        box.push('box', 'world', force)
+    box.push('box', '', [0, 50.0, 0])
+    box.push('box', '', [0, 2.0, 0])
+    box.tick(4)
+    x_half, v_half = free_flight([1.0, 2.0, 0.0], 0.5)
+    position, _, velocity, _, _ = box.state('box')
+    np.testing.assert_allclose(position, x_half, atol=1e-12)
+    np.testing.assert_allclose(velocity, v_half, atol=1e-12)
+    values = box.diagnostics()
+    assert values['superseded inputs'] == '5' and values['refused inputs'] == '0'
+
+
 def test_held_wrench_stops_after_timeout(harness, write_scene):
     """A wrench held for wrench_timeout T of simulated time delivers the impulse F T, no more."""
     sim = harness(write_scene(SCENE), time_step=STEP, wrench_timeout=0.5,

@@ -6,6 +6,7 @@ A refused value at start raises ParameterError (the executable turns it into a m
 exit status 1, see test_process.py); at runtime it is refused with a reason and the node
 keeps running with its previous values.
 """
+import os
 from pathlib import Path
 
 import numpy as np
@@ -160,7 +161,7 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
 HOSTILE = [
     ('world_frame', 'bad frame!', 'no frame name'), ('world_frame', 'w' * 100_000, 'no frame'),
     ('time_step', 1e-300, 'outside the range'), ('substeps', 10_000, 'outside the range'),
-    ('rate', 1e-300, 'outside the range'), ('publish_rate', 1e-300, 'outside the range'),
+    ('rate', 1e-300, 'at least 0.001 Hz'), ('publish_rate', 1e-300, 'outside the range'),
     ('tolerance', 1e-300, 'outside the range'), ('scene', 's' * 100_000, 'no file path'),
     ('scene', 'a\0b', 'no file path'), ('integrator', 'x' * 100_000, 'unknown integrator')]
 
@@ -213,3 +214,28 @@ def test_runtime_changes_take_effect(harness, write_scene):
     sim.tick(1)
     position, _, _, _, t = sim.state('puck')
     assert t == 0.125 and position.tolist() == [0.0, 0.0, 2.0]
+
+
+def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
+        harness, write_scene, tmp_path):
+    """Refuse each hostile scene naming the file, and run the old scene on.
+
+    Each of these once stopped the node: a RecursionError, a 1e12-sample array, a read of
+    /dev/zero.
+    """
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    sampled = SCENE.replace('mass: 2.0', 'mass: 2.0\n    inertia: {method: sampling, '
+                                         'samples: 1000000000000}')
+    (tmp_path / 'latin1.yaml').write_bytes(SCENE.encode() + b'# caf\xe9\n')
+    fifo = tmp_path / 'pipe.yaml'
+    os.mkfifo(fifo)
+    for path, reason in [(write_scene('bodies: ' + '[' * 100_000, 'deep.yaml'), 'nest'),
+                         (write_scene(sampled, 'sampled.yaml'), 'above the limit'),
+                         (str(tmp_path / 'latin1.yaml'), 'not UTF-8'),
+                         (str(fifo), 'not a regular file'), ('/dev/zero', 'not a regular'),
+                         (str(tmp_path), 'not a regular file')]:
+        result, = sim.set_parameters(scene=path)
+        assert not result.successful and path in result.reason and reason in result.reason
+    sim.tick(8)
+    position, _, velocity, _, t = sim.state('box')
+    assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0

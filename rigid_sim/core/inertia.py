@@ -25,6 +25,9 @@ SYMMETRY_RTOL = 1e-6
 # Principal-moment triangle inequality slack, relative to the trace: a flat plate has
 # I1 + I2 = I3 exactly, and its mesh integrals may miss that by round-off.
 TRIANGLE_RTOL = 1e-9
+# kg m^2. A smaller principal moment (a 1 um steel ball has 4e-30) has an inverse that
+# turns any torque into an overflowing spin; 5e-324 typed for 0.004 would be inf.
+MIN_MOMENT = 1e-30
 SEQUENCES = ('sobol', 'random')
 # Inside test ray: tilted off z so it never runs along the faces of axis-aligned meshes.
 RAY_DIRECTION = np.array([1e-3, 2e-3, 1.0])
@@ -69,7 +72,8 @@ def check_inertia(inertia):
     -------
     inertia : (3, 3) float
         The tensor, symmetrised to remove round-off. ValueError names the failed check
-        (finite 3x3, symmetric, positive definite, triangle inequality) and the values.
+        (finite 3x3, symmetric, positive definite, at least MIN_MOMENT, triangle inequality)
+        and the values.
     """
     inertia = np.asarray(inertia, dtype=float)
     if inertia.shape != (3, 3) or not np.all(np.isfinite(inertia)):
@@ -84,6 +88,9 @@ def check_inertia(inertia):
     if moments[0] <= 0:
         raise ValueError(f'inertia is not positive definite: principal moments '
                          f'{moments.tolist()}')
+    if moments[0] < MIN_MOMENT:
+        raise ValueError(f'inertia has a principal moment of {moments[0]:.3g} kg m^2, below '
+                         f'{MIN_MOMENT:g}: its inverse would overflow the angular velocity')
     if moments[0] + moments[1] < moments[2] - TRIANGLE_RTOL * moments.sum():
         raise ValueError(f'inertia violates the triangle inequality I1 + I2 >= I3 of principal '
                          f'moments {moments.tolist()}: no physical mass distribution has it')
