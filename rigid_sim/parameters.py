@@ -167,7 +167,8 @@ def _check_range(name, spec, value):
                              f'[{spec.low:g}, {spec.high:g}]')
     if name == 'rate' and 0.0 < value < MIN_RATE:
         raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
-                             f'[{MIN_RATE:g}, {spec.high:g}] (or 0: no wall clock)')
+                             f'[{MIN_RATE:g}, {spec.high:g}]: neither 0 (no wall clock) nor '
+                             f'at least {MIN_RATE:g} Hz')
 
 
 def _check_text(name, value):
