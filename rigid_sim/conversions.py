@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Messages <-> arrays: the only place ROS messages meet the core's numpy arrays.
 
 Output messages are built once per scene and refilled on every publication: the pose of a
@@ -24,21 +26,35 @@ PALETTE = ((0.90, 0.35, 0.20), (0.20, 0.55, 0.90), (0.30, 0.75, 0.35), (0.85, 0.
 
 
 def to_time(seconds, stamp=None):
-    """Simulated ``seconds`` as a builtin_interfaces/Time, filled into ``stamp`` if given."""
+    """Return simulated ``seconds`` as a builtin_interfaces/Time (filled into ``stamp``)."""
     stamp = Time() if stamp is None else stamp
     stamp.sec, stamp.nanosec = divmod(int(round(seconds * NANOSECONDS)), NANOSECONDS)
     return stamp
 
 
 def to_seconds(stamp):
-    """A builtin_interfaces/Time as float seconds."""
+    """Return a builtin_interfaces/Time as float seconds."""
     return stamp.sec + stamp.nanosec / NANOSECONDS
 
 
 def wrench_arrays(message):
-    """Force (3,) N and torque (3,) N m of a geometry_msgs/WrenchStamped."""
+    """Force (3,) N and torque (3,) N m of a geometry_msgs/WrenchStamped.
+
+    Raises ValueError for a subnormal non-zero component: no real wrench is 1e-308 N, but
+    an int assigned to a float64 field (``force.x = 15``) arrives as 15 x 5e-324 with these
+    rclpy wheels, which would silently push with nothing.
+    """
     force, torque = message.wrench.force, message.wrench.torque
-    return (np.array((force.x, force.y, force.z)), np.array((torque.x, torque.y, torque.z)))
+    force = np.array((force.x, force.y, force.z))
+    torque = np.array((torque.x, torque.y, torque.z))
+    for name, values in (('force', force), ('torque', torque)):
+        subnormal = (values != 0.0) & (np.abs(values) < np.finfo(float).tiny)
+        if subnormal.any():
+            axis = 'xyz'[int(np.argmax(subnormal))]
+            raise ValueError(f'{name}.{axis} is {values[subnormal][0]:.3g}, a subnormal '
+                             'number: write floats (15.0): an int in a float64 field '
+                             'arrives as 5e-324')
+    return force, torque
 
 
 def pose_arrays(pose):
@@ -48,12 +64,12 @@ def pose_arrays(pose):
 
 
 def vector_array(vector):
-    """A geometry_msgs/Vector3 as a (3,) array."""
+    """Return a geometry_msgs/Vector3 as a (3,) array."""
     return np.array((vector.x, vector.y, vector.z))
 
 
 def clock(seconds):
-    """A rosgraph_msgs/Clock at simulated ``seconds``."""
+    """Return a rosgraph_msgs/Clock at simulated ``seconds``."""
     return Clock(clock=to_time(seconds))
 
 
@@ -68,11 +84,14 @@ class StateMessages:
 
     Attributes
     ----------
-    poses, twists, odometry : lists of N PoseStamped, TwistStamped, Odometry (scene order)
-    pose_array : PoseArray of the same N Pose objects
-    markers : MarkerArray, one marker per body, sharing the same Pose objects
-    transforms : list of N TransformStamped, world_frame -> body frame, filled by
-        :meth:`fill_transforms`
+    poses, twists, odometry : list of N PoseStamped, TwistStamped, Odometry
+        One per body, in scene order.
+    pose_array : PoseArray
+        The same N Pose objects.
+    markers : MarkerArray
+        One marker per body, sharing the same Pose objects.
+    transforms : list of N TransformStamped
+        World_frame -> body frame, filled by :meth:`fill_transforms`.
     """
 
     def __init__(self, bodies, world_frame, frame_prefix=''):
@@ -97,10 +116,11 @@ class StateMessages:
             odometry.pose.pose = pose
 
     def fill(self, snapshot, posed, moving):
-        """Write the pose of the bodies ``posed`` and the world and body twists of the bodies
-        ``moving`` at ``snapshot`` (index iterables; each message costs Python time).
+        """Write the poses of ``posed`` and the twists of ``moving`` at ``snapshot``.
 
-        Every message's stamp is the snapshot's time; the others keep their last values.
+        ``posed`` and ``moving`` are iterables of body indices; each message costs Python time. The
+        world and body twists are written. Every message's stamp is the snapshot's time; the others
+        keep their last values.
         """
         origin, orientation = snapshot.body_frame_pose()
         velocity, angular_velocity = snapshot.body_frame_twist()
@@ -132,13 +152,16 @@ def copy_pose_to_transform(pose, transform):
 
 
 def static_transforms(bodies, frame_prefix, seconds):
-    """TransformStamped from each body frame to its named points and its IMU frame.
+    """Build the transforms from each body frame to its named points and its IMU frame.
 
     Parameters
     ----------
-    bodies : sequence of scene BodySpec (``points``: name -> (3,) m, body frame; ``imu``)
-    frame_prefix : str, prefixed to every frame
-    seconds : float, simulated time of the stamp
+    bodies : sequence of scene BodySpec
+        ``points``: name -> (3,) m, body frame; ``imu``: an ImuSpec or None.
+    frame_prefix : str
+        Prefixed to every frame.
+    seconds : float
+        Simulated time of the stamp, s.
 
     Returns
     -------
@@ -161,7 +184,7 @@ def static_transforms(bodies, frame_prefix, seconds):
 
 
 def delete_all_markers():
-    """A MarkerArray that clears every marker of this publisher in RViz."""
+    """Return a MarkerArray that clears every marker of this publisher in RViz."""
     return MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
 
 
@@ -178,7 +201,7 @@ def _set_twist(twist, values):
 
 
 def marker(index, body, pose):
-    """The RViz marker of one body's shape, drawn at ``pose`` (its body frame).
+    """Return the RViz marker of one body's shape, drawn at ``pose`` (its body frame).
 
     ``body`` is a scene BodySpec; cylinders are along the body z axis, as RViz draws them.
     """
@@ -205,7 +228,7 @@ def marker(index, body, pose):
 
 
 def imu_message(frame_id, spec):
-    """A sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
+    """Return a sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
 
     The angular velocity and linear acceleration covariances are diagonal: the variance of
     one reading's white noise (the bias is not white; it is what an estimator tracks). The
@@ -234,7 +257,7 @@ def _set_vector(vector, values):
 
 
 def diagnostics(name, stamp_seconds, level, summary, values):
-    """A DiagnosticArray with one status; ``values`` maps key -> value (formatted as text)."""
+    """Return a DiagnosticArray of one status; ``values`` maps key -> value (shown as text)."""
     status = DiagnosticStatus(level=level, name=name, message=summary, hardware_id='rigid_sim')
     status.values = [KeyValue(key=key, value=_text(value)) for key, value in values.items()]
     array = DiagnosticArray(status=[status])
@@ -251,5 +274,5 @@ def _text(value):
 
 
 def diagnostic_values(message):
-    """The key -> text values of the first status of a DiagnosticArray."""
+    """Return the key -> text values of the first status of a DiagnosticArray."""
     return {item.key: item.value for item in message.status[0].values}

@@ -42,10 +42,15 @@ class DiagnosticsOutput:
         Parameters
         ----------
         world : rigid_sim.core.world.World
+            The world whose time, energy and safeguard counts are reported.
         settings : rigid_sim.parameters.Settings
+            The node's settings (integrator, rate, time step).
         paused : bool
+            Whether integration is paused.
         refusals : rigid_sim.inputs.Refusals
-        dropped : int, ticks given up behind wall time in the window
+            Refused inputs per body and the last reason.
+        dropped : int
+            Ticks given up behind wall time in the window.
         """
         target = settings.real_time_factor
         values = {'simulated time [s]': world.time, 'paused': paused,
@@ -54,7 +59,7 @@ class DiagnosticsOutput:
                                   'none (rate 0: as fast as possible)' if target is None
                                   else target),
                   'ticks dropped behind wall time': dropped,
-                  **refusal_values(refusals.counts, refusals.last)}
+                  **refusal_values(refusals.counts, refusals.last, refusals.superseded)}
         period = 1.0 / settings.rate if settings.rate > 0.0 else None
         level, summary = health(self.stats, period, dropped)
         self._publisher.publish(conversions.diagnostics(

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """What the node reports on /diagnostics: one window of ticks, the world's health, a level.
 
 Kept apart from the node so that the node only wires topics and timers; nothing here talks
@@ -33,7 +35,7 @@ class TickStats:
         return self.step_total / max(self.ticks, 1)
 
     def real_time_factor(self, sim_time):
-        """Simulated seconds advanced per wall second since the window began."""
+        """Return the simulated seconds advanced per wall second since the window began."""
         return (sim_time - self.sim_start) / max(time.monotonic() - self.wall_start, 1e-9)
 
 
@@ -56,11 +58,16 @@ def window_values(stats, world, target_real_time_factor):
         'last step failure': safeguards.last_failure}
 
 
-def refusal_values(refused, last_refusal):
-    """Key -> value of refused inputs: the total, per body, and the last reason."""
+def refusal_values(refused, last_refusal, superseded):
+    """Return the key -> value of refused and superseded inputs.
+
+    Refused: the total, per body, and the last reason; superseded by a newer message before
+    a tick: the total.
+    """
     return {'refused inputs': sum(refused.values()),
             **{f'refused inputs {name}': count for name, count in refused.items()},
-            'last refused input': last_refusal}
+            'last refused input': last_refusal,
+            'superseded inputs': sum(superseded.values())}
 
 
 def health(stats, tick_period, dropped=0):
@@ -69,6 +76,7 @@ def health(stats, tick_period, dropped=0):
     Parameters
     ----------
     stats : TickStats
+        The window.
     tick_period : float or None
         s of wall time per tick; None when the node ticks as fast as it can.
     dropped : int

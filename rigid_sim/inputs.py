@@ -6,6 +6,13 @@ Subscription callbacks only store messages, so a callback never touches the worl
 it steps; :meth:`BodyInputs.apply` is run by the tick, in arrival order. A refused message
 changes nothing: it is counted per body, and the last reason is kept for /diagnostics.
 
+Only the newest message per body, topic and frame_id since the last tick is applied: the
+others are counted as superseded (a flood is held, not refused), so the work of a tick does
+not grow with the message rate. A callback also takes whatever else is queued on its
+subscription at once (at most ``DRAIN_LIMIT``), since the executor would spend a round of
+its wait set on each message otherwise. At most ``MAX_PENDING`` distinct (body, topic,
+frame_id) wait for one tick; more are refused.
+
 Every subscription costs the executor time on each of its rounds, whether messages come or
 not (docs/performance.md), so ``set_pose`` and ``set_twist``, which most runs never use,
 are subscribed to only once a publisher on the topic appears in the graph: looked for
@@ -18,25 +25,27 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.core.body_state import with_pose, with_twist
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.scene import wrench_target
 
 QUEUE_DEPTH = 10
 WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
 DEMAND_REFRESH = 0.5  # s of wall time between two looks for new set_pose/set_twist publishers
 STATE_TOPICS = (('set_pose', PoseStamped), ('set_twist', TwistStamped))
+DRAIN_LIMIT = 100    # messages one callback takes from its queue (the queue holds 10)
+MAX_PENDING = 1000   # distinct (body, topic, frame_id) waiting for one tick
 
 
 def held_wrenches(world):
-    """The world's held wrenches (``hold``, ``release``, ``check``): the node's only way in."""
-    return world.effect(AppliedWrenches)
+    """Return the world's held wrenches (``hold``, ``release``, ``check``): the only way in."""
+    return world.inputs
 
 
 class Refusals:
-    """Refused input messages: a count per body and the last reason."""
+    """Refused input messages (a count per body, the last reason) and superseded ones."""
 
     def __init__(self, names):
         self.counts = {name: 0 for name in names}
+        self.superseded = {name: 0 for name in names}
         self.last = ''
 
     def add(self, name, topic, error, logger):
@@ -47,7 +56,7 @@ class Refusals:
 
 
 def _world_axes(message, topic, world_frame):
-    """ValueError unless a set_pose/set_twist ``message`` is given in ``world_frame``."""
+    """Raise ValueError unless a set_pose/set_twist ``message`` is in ``world_frame``."""
     if message.header.frame_id != world_frame:
         raise ValueError(f'unknown frame_id {message.header.frame_id!r}: {topic} is given in '
                          f'the world frame; valid: [{world_frame!r}]')
@@ -67,7 +76,10 @@ class BodyInputs:
         self._node = node
         self._subscriptions = []
         self._awaited = {}         # resolved topic name -> (topic, body index), not subscribed
-        self._inbox = []           # (topic, body index, message) in arrival order
+        # (topic, body index, frame_id) -> newest message since the last tick
+        self._inbox = {}
+        self._waiting = 0          # messages received since the last tick, superseded too
+        self.received = 0          # input messages taken since the node started
         self._names = []           # body names of the scene, in scene order
         self.refusals = Refusals(())
         self._appliers = {'wrench': self._hold, 'set_pose': self._set_pose,
@@ -85,13 +97,40 @@ class BodyInputs:
         self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/{topic}'): (topic, index)
                          for index, body in enumerate(scene.bodies) for topic, _ in STATE_TOPICS}
         self._names = [body.name for body in scene.bodies]
-        self._inbox.clear()
+        self.clear()
         self.refusals = Refusals(self._names)
 
     def _subscribe(self, kind, topic, index, name):
-        return self._node.create_subscription(
-            kind, f'~/{name}/{topic}',
-            lambda message: self._inbox.append((topic, index, message)), QUEUE_DEPTH)
+        made = []
+
+        def take(message):
+            self._store(topic, index, message)
+            self._drain(made[0], topic, index)
+        made.append(self._node.create_subscription(kind, f'~/{name}/{topic}', take,
+                                                   QUEUE_DEPTH))
+        return made[0]
+
+    def _drain(self, subscription, topic, index):
+        # rclpy's executor takes messages this way, one per round of its wait set.
+        with subscription.handle:
+            for _ in range(DRAIN_LIMIT):
+                taken = subscription.handle.take_message(subscription.msg_type,
+                                                         subscription.raw)
+                if taken is None:
+                    return
+                self._store(topic, index, taken[0])
+
+    def _store(self, topic, index, message):
+        self.received += 1
+        self._waiting += 1
+        key = (topic, index, message.header.frame_id)
+        if self._inbox.pop(key, None) is not None:
+            self.refusals.superseded[self._names[index]] += 1
+        elif len(self._inbox) >= MAX_PENDING:
+            self.refusals.add(self._names[index], topic, f'more than {MAX_PENDING} distinct '
+                              'frame_ids wait for one tick', self._node.get_logger())
+            return
+        self._inbox[key] = message   # at the end: applied in the order of the newest
 
     def subscribe_on_demand(self):
         """Subscribe to every set_pose and set_twist topic that has appeared in the graph."""
@@ -111,24 +150,28 @@ class BodyInputs:
 
     @property
     def pending(self):
-        """Number of received messages the next tick will apply."""
-        return len(self._inbox)
+        """Return the number of messages received since the last tick (superseded too)."""
+        return self._waiting
 
     def clear(self):
         """Forget every message not applied yet."""
         self._inbox.clear()
+        self._waiting = 0
 
     def apply(self, world, scene, settings):
-        """Apply every stored message in arrival order; a refused one changes nothing.
+        """Apply the newest stored messages in arrival order; a refused one changes nothing.
 
         Parameters
         ----------
         world : rigid_sim.core.world.World
-        scene : rigid_sim.core.scene.Scene, the world's scene (frames and points)
-        settings : rigid_sim.parameters.Settings (``world_frame``, ``wrench_timeout``)
+            The world that holds the wrenches.
+        scene : rigid_sim.core.scene.Scene
+            The world's scene (frames and points).
+        settings : rigid_sim.parameters.Settings
+            ``world_frame`` and ``wrench_timeout`` are read.
         """
-        inbox, self._inbox = self._inbox, []
-        for topic, index, message in inbox:
+        inbox, self._inbox, self._waiting = self._inbox, {}, 0
+        for (topic, index, _), message in inbox.items():
             try:
                 self._appliers[topic](world, scene.bodies[index], index, message, settings)
             except ValueError as error:

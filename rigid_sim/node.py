@@ -32,15 +32,18 @@ NODE_NAME = 'rigid_sim'
 
 
 def load(settings):
-    """The scene named by ``settings`` and its world (SceneError, FileNotFoundError,
-    ParameterError when ``world_frame`` is a frame of the scene)."""
+    """Load the scene named by ``settings`` and build its world.
+
+    Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
+    the scene.
+    """
     scene = load_scene(find_scene(settings.scene))
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
 
 def check_frames(scene, settings):
-    """ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
+    """Raise ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
     try:
         check_world_frame(scene, settings.world_frame)
     except ValueError as error:
@@ -90,12 +93,12 @@ class RigidSimNode(Node):
 
     @property
     def paused(self):
-        """True while integration is paused."""
+        """Return whether integration is paused."""
         return self.control.paused
 
     @property
     def pending_inputs(self):
-        """Number of received input messages the next tick will apply."""
+        """Return the number of received input messages the next tick will apply."""
         return self.inputs.pending
 
     def _warn_on_slow_ticks_for_imus(self):
@@ -233,7 +236,7 @@ class RigidSimNode(Node):
         self._warn_on_slow_ticks_for_imus()
 
     def _wire_scene(self):
-        """New bodies: new topics, messages, counters and diagnostics window."""
+        """Wire the current scene: new topics, messages, counters and diagnostics window."""
         self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
         self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
         self.inputs.wire(self.scene)

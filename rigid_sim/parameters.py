@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The node's parameters: names, descriptors, defaults and the checks that refuse bad values.
 
 Every parameter is declared with ``dynamic_typing`` so that a numeric one accepts an integer
@@ -12,9 +14,24 @@ from dataclasses import dataclass, replace
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
+from rigid_sim.core.text import shown
 from rigid_sim.resources import DEFAULT_SCENE
 
-MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (ROS_NOTES)
+MAX_RATE = 1000.0  # Hz; a SingleThreadedExecutor cannot hold a faster timer (docs/ros_notes.md)
+# Hz; one tick at least every 1000 s keeps the timer period and the diagnostics meaningful.
+# Rate 0 is apart: it means no wall clock at all.
+MIN_RATE = 1e-3
+# s; a ROS stamp counts nanoseconds, so a shorter step would not advance /clock at all.
+MIN_TIME_STEP = 1e-9
+# Integrator steps per tick: a tick's work grows with them, and above this one tick of one
+# body takes longer than the fastest tick period (the World's own splitting is bounded apart).
+MAX_SUBSTEPS = 1000
+# Below float64 round-off an adaptive integrator can only shrink its steps forever.
+MIN_TOLERANCE = 1e-12
+MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
+# A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
+FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
+MAX_FRAME_NAME = 100
 MAX_STEP_TICKS = 10000  # one ~/step call blocks the executor for this many ticks at most
 # With rate 0 (no wall clock), time_step and publish_rate default to those of this rate.
 UNTIMED_DEFAULT_RATE = 100.0
@@ -56,7 +73,7 @@ class Settings:
 
     @property
     def real_time_factor(self):
-        """Simulated seconds per wall second the loop aims at; None at rate 0 (no aim)."""
+        """Return the real-time factor the loop aims at; None at rate 0 (no aim)."""
         return self.rate * self.time_step if self.rate > 0.0 else None
 
 
@@ -68,7 +85,6 @@ class Spec:
     description: str
     low: float = None  # inclusive bounds of a numeric parameter
     high: float = None
-    above_low: bool = False  # True: the lower bound itself is refused (strictly positive)
     # A text parameter must match this regular expression in full (None: any non-empty
     # text); pattern_meaning says in words what it matches.
     pattern: str = None
@@ -82,19 +98,20 @@ SPECS = {
                         'as the CPU allows', 0.0, MAX_RATE),
     'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start, '
                              f'1/{UNTIMED_DEFAULT_RATE:g} with rate 0; a later change of rate '
-                             'keeps it); time_step x rate is the real-time factor', 0.0, 10.0,
-                      above_low=True),
-    'substeps': Spec(int, 'integrator steps per tick', 1, 10000),
+                             'keeps it); time_step x rate is the real-time factor',
+                      MIN_TIME_STEP, 10.0),
+    'substeps': Spec(int, 'integrator steps per tick', 1, MAX_SUBSTEPS),
     'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
                                 'and markers go out (default rate at start): every '
                                 'round(rate / publish_rate)-th tick, at most once per tick; '
                                 'with rate 0, Hz of simulated time',
-                         0.0, MAX_RATE, above_low=True),
+                         MIN_RATE, MAX_RATE),
     'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
-    'tolerance': Spec(float, 'error target of adaptive integrators', 0.0, 1.0, above_low=True),
+    'tolerance': Spec(float, 'error target of adaptive integrators', MIN_TOLERANCE, 1.0),
     'wrench_timeout': Spec(float, 'seconds of simulated time a wrench is held after its '
                                   'message; 0 holds it until replaced', 0.0, 1.0e9),
-    'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses'),
+    'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses: name '
+                             'tokens (letters, digits, _) joined by /'),
     'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
     'start_paused': Spec(bool, 'start with integration paused (read at start only)'),
     'step_ticks': Spec(int, 'ticks that one ~/step call advances', 1, MAX_STEP_TICKS),
@@ -107,7 +124,7 @@ SPECS = {
 
 
 def descriptor(name):
-    """The ParameterDescriptor of parameter ``name``: description, type note and range."""
+    """Return the ParameterDescriptor of parameter ``name``: description, type note and range."""
     spec = SPECS[name]
     numeric = ' (integer literals accepted)' if spec.kind is float else ''
     result = ParameterDescriptor(
@@ -127,34 +144,51 @@ def coerce(name, value):
     # bool is an int in Python; a flag given for a number is a mistake, not 1 or 0.
     if spec.kind in (int, float) and (isinstance(value, bool) or
                                       not isinstance(value, (int, float))):
-        raise ParameterError(f'parameter {name!r}: expected a number, got {value!r}')
+        raise ParameterError(f'parameter {name!r}: expected a number, got {shown(value)}')
     if spec.kind is int and not isinstance(value, int):
-        raise ParameterError(f'parameter {name!r}: expected an integer, got {value!r}')
+        raise ParameterError(f'parameter {name!r}: expected an integer, got {shown(value)}')
     if spec.kind in (str, bool) and not isinstance(value, spec.kind):
         raise ParameterError(
-            f'parameter {name!r}: expected a {spec.kind.__name__}, got {value!r}')
+            f'parameter {name!r}: expected a {spec.kind.__name__}, got {shown(value)}')
     if spec.low is not None:
         _check_range(name, spec, value)
-    if spec.kind is str and spec.pattern is None and not value.strip():
-        raise ParameterError(f'parameter {name!r}: must not be empty')
-    if spec.pattern is not None and not re.fullmatch(spec.pattern, value):
-        raise ParameterError(f'parameter {name!r}: expected {spec.pattern_meaning}, '
-                             f'got {value!r}')
+    if spec.pattern is not None:
+        if len(value) > MAX_FRAME_NAME or not re.fullmatch(spec.pattern, value):
+            raise ParameterError(f'parameter {name!r}: expected {spec.pattern_meaning}, at '
+                                 f'most {MAX_FRAME_NAME} characters, got {shown(value)}')
+    elif spec.kind is str:
+        _check_text(name, value)
     return spec.kind(value)
 
 
 def _check_range(name, spec, value):
-    too_low = value <= spec.low if spec.above_low else value < spec.low
-    if not math.isfinite(value) or too_low or value > spec.high:
-        low = '(' if spec.above_low else '['
+    if not (math.isfinite(value) and spec.low <= value <= spec.high):
         raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
-                             f'{low}{spec.low}, {spec.high}]')
+                             f'[{spec.low:g}, {spec.high:g}]')
+    if name == 'rate' and 0.0 < value < MIN_RATE:
+        raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
+                             f'[{MIN_RATE:g}, {spec.high:g}]: neither 0 (no wall clock) nor '
+                             f'at least {MIN_RATE:g} Hz')
+
+
+def _check_text(name, value):
+    if not value.strip():
+        raise ParameterError(f'parameter {name!r}: must not be empty')
+    if name == 'world_frame' and not (len(value) <= MAX_FRAME_NAME
+                                      and FRAME_NAME.match(value)):
+        raise ParameterError(f'parameter {name!r}: {shown(value)} is no frame name: name '
+                             'tokens (letters, digits and _, not starting with a digit) '
+                             f'joined by /, at most {MAX_FRAME_NAME} characters')
+    if name == 'scene' and (len(value) > MAX_PATH or '\0' in value):
+        raise ParameterError(f'parameter {name!r}: {shown(value)} is no file path (at most '
+                             f'{MAX_PATH} characters, no NUL)')
 
 
 def _check_integrator(name):
     if name not in REGISTRY:
         raise ParameterError(
-            f'parameter \'integrator\': unknown integrator {name!r}; valid: {sorted(REGISTRY)}')
+            f"parameter 'integrator': unknown integrator {shown(name)}; "
+            f'valid: {sorted(REGISTRY)}')
 
 
 def declare(node):
@@ -191,16 +225,18 @@ def declare(node):
 
 def _check_unknown_overrides(node):
     # rclpy keeps the overrides of --params-file and -p only in this attribute (also read
-    # by declare); without the check a misspelt name is silently ignored (ROS_NOTES).
+    # by declare); without the check a misspelt name is silently ignored (docs/ros_notes.md).
     unknown = sorted(set(node._parameter_overrides) - set(SPECS) - set(NODE_BUILTINS))
     unknown = [name for name in unknown if not name.startswith('qos_overrides.')]
     if unknown:
-        raise ParameterError(f'unknown parameter(s) {unknown}; '
+        raise ParameterError(f'unknown parameter(s) {shown(unknown)}; '
                              f'this node has {sorted(SPECS)}')
 
 
 def updated(settings, changes):
-    """Settings with ``changes`` (rclpy Parameters) applied, or ParameterError saying why not.
+    """Return the settings with ``changes`` (rclpy Parameters) applied.
+
+    Raises ParameterError saying why a change is refused.
 
     Parameters that are not this node's own (``use_sim_time``) are passed over.
     """

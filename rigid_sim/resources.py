@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Finding the packaged configuration: source tree, pip install and colcon install alike.
 
 ``config/`` is installed to ``share/rigid_sim/config``. Where that share directory is
@@ -9,8 +11,11 @@ depends on how the package was installed:
 - the source tree (``pip install -e .`` installs no data files, and a plain venv has no
   ``AMENT_PREFIX_PATH``): ``config/`` beside the ``rigid_sim`` package directory.
 """
+import os
 import sys
 from pathlib import Path
+
+from rigid_sim.core.text import clipped, shown
 
 PACKAGE = 'rigid_sim'
 DEFAULT_SCENE = 'default.yaml'
@@ -18,7 +23,7 @@ _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def _ament_share():
-    """The share directory the ament index knows, or None outside a ROS environment."""
+    """Return the share directory the ament index knows, or None outside a ROS environment."""
     try:
         from ament_index_python.packages import (PackageNotFoundError,
                                                  get_package_share_directory)
@@ -57,24 +62,35 @@ def config_directories():
 def find_scene(name):
     """Path of the scene file ``name``.
 
-    An absolute path, or a path relative to the working directory, is taken as it is;
-    a bare file name not found there is looked up in the packaged ``config`` (INTERFACE.md),
-    then in ``config/scenes``, where the shipped scenes are.
+    An absolute path, or a path relative to the working directory, is taken as it is, as
+    soon as something exists there (a FIFO or directory is then refused by the loader as
+    not a regular file, not reported missing); a bare file name not found there is looked
+    up in the packaged ``config`` (README), then in ``config/scenes``, where the shipped
+    scenes are.
 
     Raises
     ------
     FileNotFoundError
-        Naming every place that was searched.
+        Naming every place that was searched, or why the name is no path at all.
     """
+    try:
+        return _find(name)
+    except (OSError, ValueError) as error:  # an embedded NUL, a name too long, ...
+        if isinstance(error, FileNotFoundError):
+            raise
+        raise FileNotFoundError(f'scene file {shown(name)}: {clipped(error)}') from None
+
+
+def _find(name):
     path = Path(name).expanduser()
-    if path.is_file():
+    if os.path.lexists(path):
         return path.resolve()
-    searched = [str(path.resolve())]
+    searched = [clipped(path.resolve())]
     if not path.is_absolute() and len(path.parts) == 1:
         for folder in (folder for config in config_directories()
                        for folder in (config, config / 'scenes')):
             packaged = folder / path
             if packaged.is_file():
                 return packaged
-            searched.append(str(packaged))
-    raise FileNotFoundError(f'scene file {name!r} not found; searched {searched}')
+            searched.append(clipped(packaged))
+    raise FileNotFoundError(f'scene file {shown(name)} not found; searched {searched}')

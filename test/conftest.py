@@ -1,7 +1,9 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Isolation and harnesses for the tests that speak ROS.
 
 Every run gets its own ROS_DOMAIN_ID (from the pid), discovery limited to this machine
-(ROS_NOTES: unset, DDS multicasts out of the network interface) and a temporary log
+(docs/ros_notes.md: unset, DDS multicasts out of the network interface) and a temporary log
 directory, set here before any test starts rclpy or a node process. In-process tests narrow
 discovery further, to OFF. The harnesses themselves are in ``ros_harness.py``.
 """
@@ -26,7 +28,7 @@ def pytest_sessionfinish(session, exitstatus):
 
 @pytest.fixture
 def ros_context(monkeypatch):
-    """A fresh rclpy context with discovery OFF: only nodes of this process meet."""
+    """Yield a fresh rclpy context with discovery OFF: only nodes of this process meet."""
     import rclpy
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
     context = rclpy.Context()
@@ -47,7 +49,7 @@ def write_scene(tmp_path):
 
 @pytest.fixture
 def harness(ros_context):
-    """Start a rigid_sim node and a probe node in one executor: ``harness(scene, **params)``.
+    """Start a rigid_sim node and a probe node in one executor.
 
     The node's tick loop is stopped: the test advances it with ``tick()``, unless it asks
     for ``harness(scene, ticking=True, **params)``.

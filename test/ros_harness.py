@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """A rigid_sim node and a probe node in one executor, driven tick by tick.
 
 The probe talks to the node only over ROS: it subscribes to every output, publishes
@@ -19,7 +21,7 @@ from visualization_msgs.msg import MarkerArray
 from rigid_sim import conversions
 from rigid_sim.node import RigidSimNode
 
-TIMEOUT = 15.0  # s; first discovery between processes takes 0.3-3.7 s (ROS_NOTES)
+TIMEOUT = 15.0  # s; first discovery between processes can take seconds (docs/ros_notes.md)
 
 
 def spin_until(executor, condition, timeout=TIMEOUT, what='condition'):
@@ -37,9 +39,13 @@ class SimHarness:
     Parameters
     ----------
     context : rclpy.Context
-    executor : rclpy.executors.Executor, spinning both nodes
-    scene : str, scene file
-    params : dict, further parameter overrides of the node
+        The test's own context (discovery OFF).
+    executor : rclpy.executors.Executor
+        Spins both nodes.
+    scene : str
+        Scene file.
+    params : dict
+        Further parameter overrides of the node.
     ticking : bool
         Keep the node's own tick loop; by default it is stopped and the test advances the
         node with :meth:`tick`.
@@ -100,7 +106,7 @@ class SimHarness:
         return topics
 
     def latest(self, topic):
-        """The last message received on the node-relative ``topic`` (or absolute /name)."""
+        """Return the last message received on the node-relative ``topic`` (or absolute /name)."""
         return self.received[topic if topic.startswith('/') else self.topic(topic)][-1]
 
     def state(self, body):

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench node`` runs end to end on its quick configuration (N = 1 and 10).
 
 conftest.py gives this run its own ROS_DOMAIN_ID, LOCALHOST discovery and a log directory;
@@ -23,9 +25,11 @@ def table_rows(text):
 
 
 def test_scene_has_n_spinning_boxes_and_no_wrench_inputs_at_scale(tmp_path):
-    """The generated scene holds N distinct bodies, each spinning (a non-zero angular velocity,
-    so attitude integration is exercised), all under the same gravity; from N = 100 on no body
-    takes wrench inputs, so the node makes no wrench subscriptions."""
+    """The generated scene holds N distinct spinning bodies, all under the same gravity.
+
+    Each has a non-zero angular velocity, so attitude integration is exercised; from N = 100 on
+    no body takes wrench inputs, so the node makes no wrench subscriptions.
+    """
     for n, wrench_input in ((10, True), (100, False)):
         scene = parse_scene(yaml.safe_load(scene_text(n)), base_dir=str(tmp_path))
         assert len({body.name for body in scene.bodies}) == n
@@ -35,11 +39,13 @@ def test_scene_has_n_spinning_boxes_and_no_wrench_inputs_at_scale(tmp_path):
 
 
 def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
-    """Each quick configuration gets a row: the node advanced simulated time (a positive,
-    finite real-time factor, near the target 1 since N <= 10 is light work, within what a
-    busy test machine allows), ticked about rate x duration times, and the listener process
-    heard every topic the configuration claims, at a rate near publish_rate x topics. The
-    section is written with the hand-written text around it kept."""
+    """Each quick configuration gets a row.
+
+    The node advanced simulated time (a positive, finite real-time factor, near the target 1 since
+    N <= 10 is light work, within what a busy test machine allows), ticked about rate x duration
+    times, and the listener process heard every topic the configuration claims, at a rate near
+    publish_rate x topics. The section is written with the hand-written text around it kept.
+    """
     out = tmp_path / 'performance.md'
     out.write_text('# Hand-written title\n')
     args = cli.build_parser().parse_args(['node', '--quick', '--out', str(out)])
@@ -66,8 +72,11 @@ def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
 
 
 def test_only_one_millisecond_steps_count_towards_the_1_khz_goals():
-    """The goals ask for 1 kHz physics: a row that integrates 20 ms steps meets none of them,
-    whatever its real-time factor; the same tick split into 20 steps of 1 ms does."""
+    """The goals ask for 1 kHz physics.
+
+    A row that integrates 20 ms steps meets none of them, whatever its real-time factor; the same
+    tick split into 20 steps of 1 ms does.
+    """
     split = dict(config=Config(1000, 50.0, 2e-2, 20, 50.0, 'poses'), integrator='rk4',
                  real_time_factor=1.0, tick_mean=0.01, received_rate=50.0, expected_rate=50.0)
     coarse = dict(split, config=Config(1000, 50.0, 2e-2, 1, 50.0, 'poses'),

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench throughput`` runs end to end on its quick configuration."""
 import math
 
@@ -15,10 +17,12 @@ def table_rows(text, title):
 
 
 def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
-    """Every registered integrator (and MuJoCo's Euler and RK4, installed with the test extra)
-    has a positive, finite time per body-step at each N; each effect's cost is listed; the
-    world without effects made no call into effect code; the Markdown section and the plot are
-    written, keeping hand-written text around the section."""
+    """Every registered integrator has a positive, finite time per body-step at each N.
+
+    So have MuJoCo's Euler and RK4, installed with the test extra; each effect's cost is listed;
+    the world without effects made no call into effect code; the Markdown section and the plot
+    are written, keeping hand-written text around the section.
+    """
     out = tmp_path / 'performance.md'
     out.write_text('# Hand-written title\n')
     parser = cli.build_parser()

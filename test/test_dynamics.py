@@ -1,10 +1,13 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Motion of rigid bodies against closed forms and an independent DOP853 reference."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from physics_cases import TILT
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
@@ -12,19 +15,22 @@ from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION,
 
 GRAVITY = np.array([0.4, -0.3, -9.81])   # m/s^2, tilted so every axis is exercised
 ROUNDING = 1e-11                         # relative error left by float64 sums over ~1e3 steps
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])  # a generic initial orientation
 ASYMMETRIC_INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
 
 
-def with_effects(bodies, effects, integrator, tolerance=1e-6, velocity=(0.5, 0.0, 1.0)):
+def with_effects(bodies, effects, integrator, tolerance=1e-6, velocity=(0.5, 0.0, 1.0),
+                 inputs=None):
     return cases.make_world(bodies, (0.2, -0.1, 1.0), TILT.as_quat(), velocity,
-                            (3.0, -2.0, 4.0), effects, integrator, tolerance)
+                            (3.0, -2.0, 4.0), effects, integrator, tolerance, inputs=inputs)
 
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_projectile_under_gravity(name):
-    """Uniform gravity: P = P0 + M g t exactly for every method; x = x0 + v0 t + g t^2/2
-    exactly for methods of order >= 2, within the O(dt) bound |g| t dt / 2 for order 1."""
+    """Uniform gravity.
+
+    P = P0 + M g t exactly for every method; x = x0 + v0 t + g t^2/2 exactly for methods of order
+    >= 2, within the O(dt) bound |g| t dt / 2 for order 1.
+    """
     bodies = cases.make_bodies(1.5, ASYMMETRIC_INERTIA, (0.1, -0.05, 0.02))
     world = with_effects(bodies, [Gravity(bodies, GRAVITY)], name)
     x0, p0 = world.y[0, POSITION].copy(), world.y[0, LINEAR_MOMENTUM].copy()
@@ -42,8 +48,11 @@ def test_projectile_under_gravity(name):
 
 @pytest.mark.parametrize('name, sign', [('euler', -1.0), ('semi_implicit_euler', 1.0)])
 def test_euler_projectile_error_is_half_g_t_dt(name, sign):
-    """Summing the schemes: explicit Euler drifts with the old velocity and lands g t dt / 2
-    short of the parabola; semi-implicit Euler drifts with the new one, g t dt / 2 past it."""
+    """Summing the schemes.
+
+    Explicit Euler drifts with the old velocity and lands g t dt / 2 short of the parabola;
+    semi-implicit Euler drifts with the new one, g t dt / 2 past it.
+    """
     bodies = cases.make_bodies(1.5, ASYMMETRIC_INERTIA)
     world = with_effects(bodies, [Gravity(bodies, GRAVITY)], name)
     x0, v0 = world.y[0, POSITION].copy(), world.y[0, LINEAR_MOMENTUM] / 1.5
@@ -59,11 +68,11 @@ FORCE_POINT = np.array([0.3, 0.1, -0.2])     # m, body frame
 
 
 def pushed_at_point(integrator, tolerance=1e-6):
-    """The spinning body with OFFSET_FORCE held at FORCE_POINT ('world_point' frame)."""
+    """Return the spinning body with OFFSET_FORCE held at FORCE_POINT ('world_point' frame)."""
     bodies = cases.make_bodies(1.5, ASYMMETRIC_INERTIA, (0.1, -0.05, 0.02))
     wrenches = AppliedWrenches(bodies)
     wrenches.hold(0, 'thruster', 'world_point', OFFSET_FORCE, point=FORCE_POINT)
-    return with_effects(bodies, [wrenches], integrator, tolerance)
+    return with_effects(bodies, [], integrator, tolerance, inputs=wrenches)
 
 
 def point_force_invariant(world):
@@ -75,8 +84,10 @@ def point_force_invariant(world):
 
 @pytest.mark.parametrize('name', [n for n, c in REGISTRY.items() if c.order >= 2])
 def test_offset_force_moves_centre_of_mass_on_parabola(name):
-    """A force of fixed world direction at any point accelerates the centre of mass by F/M,
-    whatever rotation its torque causes: x = x0 + v0 t + F t^2 / 2M."""
+    """A fixed world force at any point moves the centre of mass on the free parabola.
+
+    Whatever rotation its torque causes, x = x0 + v0 t + F t^2 / 2M.
+    """
     world = pushed_at_point(name)
     x0, v0 = world.y[0, POSITION].copy(), world.y[0, LINEAR_MOMENTUM] / 1.5
     angular_momentum0 = world.y[0, ANGULAR_MOMENTUM].copy()
@@ -92,8 +103,11 @@ def test_offset_force_moves_centre_of_mass_on_parabola(name):
     ('rk4', 4e-3, 1e-6, 1e-9), ('rk4', 2e-3, 1e-6, 1e-9 / 2 ** 4),
     ('dopri5', 0.05, 1e-8, 2e-7), ('dopri5', 0.05, 1e-10, 2e-9)])
 def test_offset_force_conserves_its_hamiltonian(name, dt, tolerance, allowed):
-    """dH/dt = F.v + omega.(Rr x F) - F.(v + omega x Rr) = 0 for a constant world force at body
-    point r; the numerical drift shrinks as dt^4 for rk4 and with the tolerance for dopri5."""
+    """A constant world force at a body point conserves its Hamiltonian H.
+
+    dH/dt = F.v + omega.(Rr x F) - F.(v + omega x Rr) = 0 for a constant world force at body
+    point r; the numerical drift shrinks as dt^4 for rk4 and with the tolerance for dopri5.
+    """
     world = pushed_at_point(name, tolerance)
     start = point_force_invariant(world)
     energy_scale = float(world.snapshot().kinetic_energy()[0])
@@ -102,18 +116,23 @@ def test_offset_force_conserves_its_hamiltonian(name, dt, tolerance, allowed):
 
 
 def damped_oscillation(d0, v0, omega0, zeta, t):
-    """Closed form of d'' + 2 zeta omega0 d' + omega0^2 d = 0 per axis.
+    """Return the closed form of d'' + 2 zeta omega0 d' + omega0^2 d = 0 per axis.
 
     Parameters
     ----------
-    d0, v0 : (3,) initial displacement, m, and velocity, m/s
-    omega0 : float, undamped angular frequency, rad/s
-    zeta : float, damping ratio
-    t : (T,) s
+    d0, v0 : (3,) float
+        Initial displacement, m, and velocity, m/s.
+    omega0 : float
+        Undamped angular frequency, rad/s.
+    zeta : float
+        Damping ratio.
+    t : (T,) float
+        Times, s.
 
     Returns
     -------
-    (T, 3) displacement and (T, 3) velocity
+    displacement, velocity : (T, 3) float each
+        m and m/s.
     """
     t = t[:, None]
     decay = zeta * omega0
@@ -137,8 +156,10 @@ def damped_oscillation(d0, v0, omega0, zeta, t):
 @pytest.mark.parametrize('zeta', [0.2, 1.0, 2.5], ids=['under', 'critical', 'over'])
 @pytest.mark.parametrize('name', ['rk4', 'dopri5'])
 def test_spring_damper_at_centre_of_mass(name, zeta):
-    """A zero-rest-length spring-damper at the centre of mass, force -k d - c d', makes each
-    axis a damped oscillator m d'' + c d' + k d = 0, whatever the body's spin."""
+    """A zero-rest-length spring-damper at the centre of mass makes a damped oscillator.
+
+    With force -k d - c d', each axis follows m d'' + c d' + k d = 0, whatever the body's spin.
+    """
     mass, stiffness, anchor = 2.0, 18.0, np.array([1.0, 2.0, 3.0])
     omega0 = np.sqrt(stiffness / mass)
     com = np.array([0.1, -0.05, 0.02])
@@ -162,8 +183,11 @@ def test_spring_damper_at_centre_of_mass(name, zeta):
 
 
 def test_body_frame_pose_of_offset_centre_of_mass():
-    """A body frame offset from the centre of mass by c reports origin x - R c and origin
-    velocity v - omega x R c; under a steady spin about a principal axis R = exp(omega t) R0."""
+    """A body frame offset from the centre of mass by c reports its own origin and velocity.
+
+    The origin is x - R c and its velocity v - omega x R c; under a steady spin about a
+    principal axis R = exp(omega t) R0.
+    """
     com = np.array([0.2, -0.1, 0.05])
     bodies = cases.make_bodies(2.0, np.diag([0.15, 0.2, 0.3]), com)
     origin0, velocity0 = np.array([1.0, 2.0, 3.0]), np.array([0.1, -0.2, 0.3])
@@ -184,8 +208,11 @@ def test_body_frame_pose_of_offset_centre_of_mass():
 
 
 def test_initial_pose_and_twist_are_those_of_the_body_frame():
-    """initial_state takes the pose and twist of the body frame: read back at t = 0 they are
-    returned unchanged, and the centre of mass sits at origin + R c moving at v + omega x R c."""
+    """initial_state takes the pose and twist of the body frame.
+
+    Read back at t = 0 they are returned unchanged, and the centre of mass sits at origin + R c
+    moving at v + omega x R c.
+    """
     com = np.array([0.2, -0.1, 0.05])
     bodies = cases.make_bodies(2.0, ASYMMETRIC_INERTIA, com)
     origin0, velocity0, omega0 = np.array([1.0, 2.0, 3.0]), np.array([0.1, -0.2, 0.3]), \
@@ -257,8 +284,11 @@ def assert_free_rotation_follows(name, moments, omega_body0, reference):
 
 @pytest.mark.parametrize('name', cases.ACCURATE)
 def test_torque_free_symmetric_top(name):
-    """Axisymmetric top I = (0.3, 0.3, 0.5): omega_3 constant, omega_perp precessing in body
-    axes at (I3 - I1) omega_3 / I1, orientation exp(L t / I1) R0 exp(-Omega t e3)."""
+    """Axisymmetric top I = (0.3, 0.3, 0.5).
+
+    omega_3 constant, omega_perp precessing in body axes at (I3 - I1) omega_3 / I1, orientation
+    exp(L t / I1) R0 exp(-Omega t e3).
+    """
     moments, omega_body0 = (0.3, 0.3, 0.5), np.array([1.0, -0.5, 6.0])
     assert_free_rotation_follows(name, moments, omega_body0,
                                  lambda times: symmetric_top(0.3, 0.5, omega_body0, times))
@@ -266,8 +296,11 @@ def test_torque_free_symmetric_top(name):
 
 @pytest.mark.parametrize('name', cases.ACCURATE)
 def test_torque_free_asymmetric_top_near_intermediate_axis(name):
-    """I = diag(1, 2, 3) spun near the intermediate axis flips (Dzhanibekov); its omega_b(t)
-    and q(t) follow Euler's equations with dq/dt = q (omega_b, 0) / 2 (DOP853 at 1e-12)."""
+    """I = diag(1, 2, 3) spun near the intermediate axis flips (Dzhanibekov).
+
+    Its omega_b(t) and q(t) follow Euler's equations with dq/dt = q (omega_b, 0) / 2 (DOP853 at
+    1e-12).
+    """
     moments, omega_body0 = (1.0, 2.0, 3.0), np.array([0.1, 5.0, 0.1])
     reference = asymmetric_top(moments, omega_body0, np.array([1.0, 2.0, 3.0, 4.0]))
     assert np.min(reference[1][:, 1]) < 0.0  # the reference really flips within 4 s

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Effects add the wrenches physics says they do, and effects a world does not list never run."""
 import importlib
 import inspect
@@ -8,15 +10,16 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
+from physics_cases import TILT
 import rigid_sim.core.effects
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches, WrenchInputs
+from rigid_sim.core.effects.base import Effect
 from rigid_sim.core.effects.damping import Damping
-from rigid_sim.core.effects.gravity import Gravity
+from rigid_sim.core.effects.gravity import Gravity, GravityParameters
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
 
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])
 INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
 COM = np.array([0.1, -0.05, 0.02])   # m, centre of mass in the body frame
 OMEGA = np.array([3.0, -2.0, 4.0])    # rad/s, world
@@ -38,9 +41,12 @@ def net_wrench(world):
 
 @pytest.mark.parametrize('name', cases.ACCURATE)
 def test_damping_decays_momenta_exponentially(name):
-    """F = -c P and tau = -c' L give P = P0 exp(-c t) and L = L0 exp(-c' t) (L keeps its world
+    """Damping makes the momenta decay exponentially and the kinetic energy fall.
+
+    F = -c P and tau = -c' L give P = P0 exp(-c t) and L = L0 exp(-c' t) (L keeps its world
     direction while the body tumbles), x = x0 + v0 (1 - exp(-c t)) / c, and a kinetic energy
-    that falls at every step: dE/dt = -c P^2 / M - c' omega.L < 0."""
+    that falls at every step: dE/dt = -c P^2 / M - c' omega.L < 0.
+    """
     linear, angular, dt = 0.8, 0.5, 5e-3
     world = tumbling(lambda bodies: [Damping(bodies, linear, angular)], name,
                      cases.ADAPTIVE_TOLERANCE)
@@ -63,8 +69,11 @@ def test_damping_decays_momenta_exponentially(name):
 
 
 def test_gravity_never_torques():
-    """Uniform gravity acts at the centre of mass: exactly M g on each body and no torque
-    whatever the pose, and it is declared torque-free so integrators may rely on it."""
+    """Uniform gravity acts at the centre of mass.
+
+    Exactly M g on each body and no torque whatever the pose, and it is declared torque-free so
+    integrators may rely on it.
+    """
     bodies = cases.make_bodies([1.5, 0.3], [INERTIA, 2 * INERTIA], [COM, -3 * COM])
     gravity = Gravity(bodies, GRAVITY)
     generator = np.random.default_rng(7)
@@ -79,8 +88,10 @@ def test_gravity_never_torques():
 
 
 def test_gravity_potential_makes_energy_conserved():
-    """Kinetic energy plus -M g.x is conserved in free fall (rk4 integrates the parabola
-    exactly; the rotation is torque-free)."""
+    """Kinetic energy plus -M g.x is conserved in free fall.
+
+    rk4 integrates the parabola exactly, and the rotation is torque-free.
+    """
     world = tumbling(lambda bodies: [Gravity(bodies, GRAVITY)])
     start = world.energy()
     cases.advance(world, 5e-3, 1.0)
@@ -110,9 +121,11 @@ def total_momenta(world):
 @pytest.mark.parametrize('damping, rest_length', [(0.0, 0.0), (0.0, 0.3), (0.6, 0.3)],
                          ids=['zero-rest', 'rest-length', 'damped'])
 def test_spring_between_bodies_conserves_momenta(damping, rest_length):
-    """A spring pushes its two ends with equal and opposite forces along the line joining
-    them: total P and total sum(x x P + L) are conserved; energy too when undamped, and it
-    falls when damped."""
+    """A spring pushes its two ends with equal and opposite forces along the line joining them.
+
+    Total P and total sum(x x P + L) are conserved; energy too when undamped, and it falls when
+    damped.
+    """
     world = two_bodies_on_a_spring(damping, rest_length)
     momentum0, angular0 = total_momenta(world)
     energy0, first_momentum0 = world.energy(), world.y[0, LINEAR_MOMENTUM].copy()
@@ -135,7 +148,7 @@ def pushed(max_force=10.0, max_torque=5.0, accepts=None, integrator='rk4'):
     bodies = cases.make_bodies([1.5, 0.5], [INERTIA, INERTIA], [COM, COM])
     wrenches = AppliedWrenches(bodies, max_force, max_torque, accepts)
     world = cases.make_world(bodies, np.zeros((2, 3)), [TILT.as_quat()] * 2, np.zeros((2, 3)),
-                             np.zeros((2, 3)), [wrenches], integrator)
+                             np.zeros((2, 3)), [], integrator, inputs=wrenches)
     return world, wrenches
 
 
@@ -153,8 +166,10 @@ def test_held_wrench_stops_acting_when_it_expires(name):
 
 
 def test_hold_ends_on_the_step_that_reaches_it_with_decimal_steps():
-    """Ten steps of 0.01 s sum to 1e-17 s short of 0.1 s; a 0.1 s hold still ends there and
-    delivers the impulse F x 0.1 s, not one step more."""
+    """Ten steps of 0.01 s sum to 1e-17 s short of 0.1 s.
+
+    A 0.1 s hold still ends there and delivers the impulse F x 0.1 s, not one step more.
+    """
     world, wrenches = pushed()
     force = np.array([2.0, -1.0, 0.5])
     wrenches.hold(0, 'world', 'world', force, expires=0.1)
@@ -165,8 +180,10 @@ def test_hold_ends_on_the_step_that_reaches_it_with_decimal_steps():
 
 
 def test_replacing_a_timed_hold_gives_the_new_one_its_own_end():
-    """A hold replaced under its key before it ends acts until the new end, not the old one:
-    0.5 s at F, then the replacement, 2 N until t = 1.5 s, so P(1 s) = F 0.25 + F2 0.75."""
+    """A hold replaced under its key before it ends acts until the new end, not the old one.
+
+    0.5 s at F, then the replacement, 2 N until t = 1.5 s, so P(1 s) = F 0.25 + F2 0.75.
+    """
     world, wrenches = pushed()
     force, replacement = np.array([2.0, 0.0, 0.0]), np.array([0.0, 2.0, 0.0])
     wrenches.hold(0, 'k', 'world', force, expires=0.5)
@@ -188,8 +205,10 @@ def test_non_finite_point_of_application_is_refused():
 
 
 def test_reset_drops_held_wrenches():
-    """A push held at t = 10 s until 10.1 s belongs to that run: after a reset to t = 0 the
-    bodies are free again, so they stay at rest."""
+    """A push held at t = 10 s until 10.1 s belongs to that run.
+
+    After a reset to t = 0 the bodies are free again, so they stay at rest.
+    """
     world, wrenches = pushed()
     cases.advance(world, 0.125, 10.0)
     wrenches.hold(0, 'world', 'world', [2.0, 0.0, 0.0], expires=10.1)
@@ -214,9 +233,11 @@ def test_same_key_replaces_and_different_keys_add():
 
 
 def test_wrench_frames():
-    """World axes act as given at the centre of mass; body axes are turned by R; a force at
-    body point p gives the torque (x_p - x) x f with x_p - x = R (p - c), in both 'point'
-    (body-axes force) and 'world_point' (world-axes force)."""
+    """World axes act as given at the centre of mass.
+
+    Body axes are turned by R; a force at body point p gives the torque (x_p - x) x f with x_p - x
+    = R (p - c), in both 'point' (body-axes force) and 'world_point' (world-axes force).
+    """
     force, torque, point = np.array([1.0, -2.0, 0.5]), np.array([0.2, 0.1, -0.3]), \
         np.array([0.3, 0.1, -0.2])
     lever = TILT.apply(point - COM)
@@ -244,8 +265,11 @@ def test_wrench_frames():
 ], ids=['nan-force', 'inf-torque', 'force-limit', 'torque-limit', 'unknown-frame',
         'no-input'])
 def test_refused_wrench_changes_nothing(body, frame, force, torque):
-    """A wrench that is not finite, above the limits, in an unknown frame or aimed at a body
-    without wrench input is refused with ValueError, and what was held stays held."""
+    """A refused wrench raises ValueError, and what was held stays held.
+
+    Refused: not finite, above the limits, in an unknown frame or aimed at a body without
+    wrench input.
+    """
     world, wrenches = pushed(accepts=[True, False])
     wrenches.hold(0, 'key', 'world', [1.0, 2.0, 3.0], [0.1, 0.2, 0.3])
     before, wrench_before = wrenches.held, world.wrench(world.snapshot())
@@ -257,35 +281,40 @@ def test_refused_wrench_changes_nothing(body, frame, force, torque):
 
 
 def effect_classes():
-    """Every effect class the core ships: classes with ``accumulate`` in rigid_sim.core.effects."""
+    """Every effect class the core ships: the subclasses of Effect in rigid_sim.core.effects."""
     found = set()
     for module in pkgutil.iter_modules(rigid_sim.core.effects.__path__):
         imported = importlib.import_module(f'rigid_sim.core.effects.{module.name}')
         found.update(cls for _, cls in inspect.getmembers(imported, inspect.isclass)
-                     if hasattr(cls, 'accumulate'))
+                     if issubclass(cls, Effect) and cls is not Effect)
     return found
 
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_unlisted_effects_cost_nothing(name, monkeypatch):
-    """A world runs only the effects it lists: with none, no effect code runs while stepping
-    (every effect's methods are made to raise), the net wrench is zero and no body is torqued;
-    with gravity alone, gravity is the only effect evaluated, once per wrench evaluation."""
+    """A world compiles and runs only the effects it lists.
+
+    With none, no effect's parameters or energy are read while it steps (every effect's are
+    made to raise), its wrench sum gets the inputs alone, the net wrench is zero and no body is
+    torqued; with gravity alone, gravity's parameters are the only effect's its kernel is given.
+    """
     def refuse(*args):
         raise AssertionError('an unlisted effect was evaluated')
 
-    assert {AppliedWrenches, Damping, Gravity, Springs} <= effect_classes()
-    calls = []
+    assert {Damping, Gravity, Springs} <= effect_classes()
     for cls in effect_classes():
-        monkeypatch.setattr(cls, 'accumulate', refuse)
+        monkeypatch.setattr(cls, 'parameters', property(refuse))
         monkeypatch.setattr(cls, 'potential_energy', refuse)
     bare = tumbling(integrator=name)
     assert bare.effects == [] and not bare.torqued.any()
+    assert [type(p) for p in bare.effect_parameters()] == [WrenchInputs]
     cases.advance(bare, 0.05, 0.2)
     bare.energy()
     assert not np.any(bare.wrench(bare.snapshot()))
-    monkeypatch.setattr(Gravity, 'accumulate', lambda self, *args: calls.append(self))
+    monkeypatch.undo()
     only_gravity = tumbling(lambda bodies: [Gravity(bodies, GRAVITY)], integrator=name)
     cases.advance(only_gravity, 0.05, 0.2)
     assert [type(effect) for effect in only_gravity.effects] == [Gravity]
-    assert len(calls) == only_gravity.integrator.evaluations > 0
+    assert [type(p) for p in only_gravity.effect_parameters()] == [GravityParameters,
+                                                                   WrenchInputs]
+    assert only_gravity.integrator.evaluations > 0

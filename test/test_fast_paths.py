@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The short cuts of the step give the physics of the general path.
 
 Bodies that share no effect are independent, so the exact free flow of a body must not depend
@@ -8,7 +10,7 @@ at the end of the last step; a wrench held since then must still be seen.
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
@@ -23,9 +25,12 @@ DT = 0.37   # s: several radians turned, so any difference in the paths would sh
 
 
 def test_free_flow_of_a_body_does_not_depend_on_its_companions():
-    """Each asymmetric body flows to the same state alone (unmasked path), with all the
-    others (unmasked) and beside a still and a spherical body (masked path), to round-off;
-    the still body stays still and the sphere keeps its angular momentum."""
+    """Each asymmetric body flows to the same state, whatever its companions.
+
+    Alone (unmasked path), with all the others (unmasked) and beside a still and a spherical
+    body (masked path), the states agree to round-off; the still body stays still and the
+    sphere keeps its angular momentum.
+    """
     together = torque_free_flow(MOMENTS, ANGULAR_MOMENTUM, ORIENTATION, DT)
     mixed_moments = np.vstack((MOMENTS, [[1.0, 1.0, 1.0], [1.0, 2.0, 3.0]]))
     mixed_l = np.vstack((ANGULAR_MOMENTUM, [[0.3, -0.2, 0.5], [0.0, 0.0, 0.0]]))
@@ -44,14 +49,16 @@ def test_free_flow_of_a_body_does_not_depend_on_its_companions():
 
 
 def test_guard_sees_a_wrench_held_between_steps():
-    """A torque-free body moves exactly at any step, so a fast spin takes one substep; once a
-    torque is held on it, |omega| dt above the exact_split bound splits the step."""
+    """A torque-free body moves exactly at any step, so a fast spin takes one substep.
+
+    Once a torque is held on it, |omega| dt above the exact_split bound splits the step.
+    """
     bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
                          np.zeros((1, 3)))
     y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
                       [[0.0, 0.0, 20.0]])   # |omega| dt = 0.2, four times the bound
     wrenches = AppliedWrenches(bodies)
-    world = World(bodies, y, [wrenches], 'exact_split')
+    world = World(bodies, y, [], 'exact_split', inputs=wrenches)
     dt = 0.01
     world.step(dt)
     assert world.diagnostics.substeps == 1

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Mass properties of shapes and meshes against closed forms derived here."""
 import math
 

@@ -1,6 +1,11 @@
-"""Packaging: a colcon build gives the layout ``ros2 run`` and the ament index expect, and
-the installed executable starts; the README's test command is the one CI runs; bare scene
-names are found where INTERFACE.md says."""
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Packaging: a colcon install, the README's test command, bare scene names.
+
+A colcon build gives the layout ``ros2 run`` and the ament index expect, and the installed
+executable starts; the README's test command is the one CI runs; bare scene names are found where
+the README says.
+"""
 import os
 import signal
 import subprocess
@@ -13,7 +18,7 @@ from ament_index_python.packages import get_package_share_directory
 
 ROOT = Path(__file__).resolve().parents[1]
 START_TIMEOUT = 30.0  # s: a new process imports numpy, scipy and rclpy
-BUILD_TIMEOUT = 120.0  # s; a build takes about 2 s
+BUILD_TIMEOUT = 120.0  # s; only a hung build comes near it, on a loaded machine too
 
 
 def colcon_build(tmp_path):
@@ -43,8 +48,10 @@ def first_line_containing(process, words, timeout):
 
 
 def test_colcon_install_has_ament_layout_and_its_executable_starts(tmp_path, monkeypatch):
-    """ros2 run looks in lib/<pkg>/, the ament index in share/ament_index and share/<pkg>;
-    the installed executable finds the packaged default scene there by its bare name."""
+    """ros2 run looks in lib/<pkg>/, the ament index in share/ament_index and share/<pkg>.
+
+    The installed executable finds the packaged default scene there by its bare name.
+    """
     prefix = colcon_build(tmp_path)
     executable = prefix / 'lib' / 'rigid_sim' / 'rigid_sim_node'
     assert os.access(executable, os.X_OK)
@@ -94,8 +101,10 @@ def test_readme_names_every_integrator_and_parameter():
 
 
 def test_bare_scene_name_is_found_in_config_then_its_scenes(tmp_path, monkeypatch):
-    """A bare name is taken from the working directory, else from the packaged config/ (as
-    INTERFACE.md says), else from config/scenes/; a miss names every place searched."""
+    """A bare scene name is looked up in the working directory, config/, then config/scenes/.
+
+    That is the order the README gives; a miss names every place searched.
+    """
     from rigid_sim import resources
     config = tmp_path / 'share' / 'config'
     (config / 'scenes').mkdir(parents=True)

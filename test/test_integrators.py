@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Integrators: the registry, convergence orders, and the contract every method keeps."""
 from dataclasses import replace
 
@@ -6,12 +8,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
+from physics_cases import TILT
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY, make_integrator
 from rigid_sim.core.state import ORIENTATION, POSITION
 
-TILT = Rotation.from_rotvec([0.3, -0.5, 0.8])
 # A body on a spring from an off-centre point, under gravity: translation and rotation coupled.
 SPRUNG = cases.SingleBody(
     mass=1.2, inertia=TILT.as_matrix() @ np.diag([0.3, 0.5, 0.7]) @ TILT.as_matrix().T,
@@ -60,9 +62,11 @@ def reference():
 @pytest.mark.parametrize('damping', [0.0, SPRUNG.damping], ids=['undamped', 'damped'])
 @pytest.mark.parametrize('name', cases.FIXED_STEP)
 def test_convergence_order(name, damping):
-    """A method of order p has global error C dt^p: halving dt divides it by 2^p. The observed
-    slope of log(error) against log(dt) over three step sizes is within 0.3 of cls.order,
-    with forces of position only (undamped) and of velocity too (damped)."""
+    """A method of order p has global error C dt^p: halving dt divides it by 2^p.
+
+    The observed slope of log(error) against log(dt) over three step sizes is within 0.3 of
+    cls.order, with forces of position only (undamped) and of velocity too (damped).
+    """
     case = replace(SPRUNG, damping=damping)
     reference = sprung_reference(case)
     order = REGISTRY[name].order
@@ -75,8 +79,11 @@ def test_convergence_order(name, damping):
 
 
 def test_dopri5_error_falls_with_tolerance(reference):
-    """An error-controlled method meets a tighter tolerance with a smaller error: a hundredfold
-    tighter tolerance gives at least a tenfold smaller error, and the error stays near it."""
+    """An error-controlled method meets a tighter tolerance with a smaller error.
+
+    A hundredfold tighter tolerance gives at least a tenfold smaller error, and the error stays
+    near it.
+    """
     tolerances = [1e-5, 1e-7, 1e-9]
     errors = [sprung_error(cases.advance(sprung_world('dopri5', tolerance), 0.1, DURATION),
                            reference) for tolerance in tolerances]
@@ -105,8 +112,10 @@ def test_registry_names_and_orders(name):
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_step_keeps_unit_quaternions_and_leaves_its_input(name):
-    """Orientations stay unit quaternions after every step (the integrator owns normalisation),
-    and the state handed to ``step`` is not modified."""
+    """Orientations stay unit quaternions and the state handed to ``step`` is not modified.
+
+    The integrator owns normalisation.
+    """
     world = sprung_world(name)
     y = world.y.copy()
     y[:, ORIENTATION] *= 1.0 + 1e-6   # slightly off unit, as accumulated rounding leaves it
@@ -119,8 +128,11 @@ def test_step_keeps_unit_quaternions_and_leaves_its_input(name):
 
 
 def test_body_momentum_rk4_beats_world_momentum_rk4_near_intermediate_axis():
-    """Near the intermediate axis, RK4 on body-axes momenta (omega_b independent of q) is far
-    more accurate than RK4 on Baraff's world L, whose orientation error feeds back into omega."""
+    """Near the intermediate axis, RK4 on body-axes momenta beats RK4 on world momenta.
+
+    In body axes omega_b does not depend on q; with Baraff's world L the orientation error
+    feeds back into omega.
+    """
     moments, omega_body0 = np.array([1.0, 2.0, 3.0]), np.array([0.1, 5.0, 0.1])
     free_body = cases.SingleBody(mass=1.0, inertia=np.diag(moments))
     duration = 4.0

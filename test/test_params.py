@@ -1,9 +1,12 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Parameters: declared defaults, integer literals, refusals at start and at runtime.
 
 A refused value at start raises ParameterError (the executable turns it into a message and
 exit status 1, see test_process.py); at runtime it is refused with a reason and the node
 keeps running with its previous values.
 """
+import os
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +68,7 @@ def test_clock_advances_by_time_step_per_tick(harness, write_scene):
 
 
 def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, write_scene):
-    """rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
+    """At rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
     sim = harness(write_scene(SCENE), rate=100.0, publish_rate=25.0, time_step=0.125)
     sim.tick(8)
     assert len(sim.received['/clock']) == 8
@@ -111,9 +114,12 @@ def test_misspelt_parameter_in_params_file_is_refused(ros_context, write_scene, 
 
 
 def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context):
-    """config/rigid_sim.yaml names each parameter once; what it sets has its default value,
-    and the two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in
-    a comment: the file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs."""
+    """Shipped parameter file lists every parameter at its default.
+
+    config/rigid_sim.yaml names each parameter once; what it sets has its default value, and the
+    two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in a comment: the
+    file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs.
+    """
     text = SHIPPED_PARAMETERS.read_text()
     listed = yaml.safe_load(text)['/**']['ros__parameters']
     follow_rate = {'time_step', 'publish_rate'}
@@ -131,8 +137,10 @@ def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context
 
 
 def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_scene):
-    """ros2 param set with a bad value or a malformed scene: refused with the reason, and
-    the node keeps simulating its scene with its previous settings."""
+    """ros2 param set with a bad value or a malformed scene.
+
+    Refused with the reason, and the node keeps simulating its scene with its previous settings.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     before = sim.sim.settings
     rate, = sim.set_parameters(rate=-5.0)
@@ -152,9 +160,47 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
 
 
+# (name, value, reason): values a runtime change used to get through.
+HOSTILE = [
+    ('world_frame', 'bad frame!', 'no frame name'), ('world_frame', 'w' * 100_000, 'no frame'),
+    ('time_step', 1e-300, 'outside the range'), ('substeps', 10_000, 'outside the range'),
+    ('rate', 1e-300, 'at least 0.001 Hz'), ('publish_rate', 1e-300, 'outside the range'),
+    ('tolerance', 1e-300, 'outside the range'), ('scene', 's' * 100_000, 'no file path'),
+    ('scene', 'a\0b', 'no file path'), ('integrator', 'x' * 100_000, 'unknown integrator')]
+
+
+@pytest.mark.parametrize('name, value, reason', HOSTILE,
+                         ids=[f'{n}-{str(v)[:12]}'
+                              for n, v, _ in HOSTILE])
+def test_hostile_value_is_refused_at_start_with_a_short_reason(
+        ros_context, write_scene, name, value, reason):
+    """Bounds hold at start as at runtime, and a huge value is quoted by its ends only."""
+    overrides = [Parameter('scene', value=write_scene(SCENE)), Parameter(name, value=value)]
+    with pytest.raises(ParameterError, match=f"parameter '{name}'.*{reason}") as refusal:
+        RigidSimNode(context=ros_context, parameter_overrides=overrides)
+    assert len(str(refusal.value)) < 1000
+
+
+def test_hostile_runtime_values_are_refused_and_the_clock_keeps_advancing(harness, write_scene):
+    """Each is refused with its reason, quoted short, and the node runs on unchanged."""
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    before = sim.sim.settings
+    for name, value, reason in HOSTILE:
+        result, = sim.set_parameters(**{name: value})
+        assert not result.successful, name
+        assert len(result.reason) < 1000 and (reason in result.reason or 'range' in
+                                              result.reason), result.reason
+    assert sim.sim.settings == before
+    sim.tick(8)
+    assert clock_nanoseconds(sim)[-1] == 1_000_000_000
+
+
 def test_runtime_changes_take_effect(harness, write_scene):
-    """Accepted changes apply at once: rate (an integer literal) sets the timer period,
-    world_frame the stamps' frame, integrator the method, scene a new world at time 0."""
+    """Accepted changes apply at once.
+
+    ``rate`` (an integer literal) sets the timer period, ``world_frame`` the stamps' frame,
+    ``integrator`` the method, ``scene`` a new world at time 0.
+    """
     sim = harness(write_scene(SCENE), time_step=0.125)
     sim.tick(2)
     assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',
@@ -171,3 +217,28 @@ def test_runtime_changes_take_effect(harness, write_scene):
     sim.tick(1)
     position, _, _, _, t = sim.state('puck')
     assert t == 0.125 and position.tolist() == [0.0, 0.0, 2.0]
+
+
+def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
+        harness, write_scene, tmp_path):
+    """Refuse each hostile scene naming the file, and run the old scene on.
+
+    Each of these once stopped the node: a RecursionError, a 1e12-sample array, a read of
+    /dev/zero.
+    """
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    sampled = SCENE.replace('mass: 2.0', 'mass: 2.0\n    inertia: {method: sampling, '
+                                         'samples: 1000000000000}')
+    (tmp_path / 'latin1.yaml').write_bytes(SCENE.encode() + b'# caf\xe9\n')
+    fifo = tmp_path / 'pipe.yaml'
+    os.mkfifo(fifo)
+    for path, reason in [(write_scene('bodies: ' + '[' * 100_000, 'deep.yaml'), 'nest'),
+                         (write_scene(sampled, 'sampled.yaml'), 'above the limit'),
+                         (str(tmp_path / 'latin1.yaml'), 'not UTF-8'),
+                         (str(fifo), 'not a regular file'), ('/dev/zero', 'not a regular'),
+                         (str(tmp_path), 'not a regular file')]:
+        result, = sim.set_parameters(scene=path)
+        assert not result.successful and path in result.reason and reason in result.reason
+    sim.tick(8)
+    position, _, velocity, _, t = sim.state('box')
+    assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0

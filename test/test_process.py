@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The ``rigid_sim_node`` executable as its own process, talking over DDS.
 
 The environment comes from conftest.py (this run's ROS_DOMAIN_ID, discovery on localhost);
@@ -36,7 +38,7 @@ def start_node(*ros_arguments, cwd):
 
 @pytest.fixture
 def probe():
-    """A node in this test process, on this run's domain, with its executor."""
+    """Yield a node in this test process, on this run's domain, with its executor."""
     context = rclpy.Context()
     rclpy.init(context=context)
     node = Node('probe', context=context)
@@ -49,8 +51,11 @@ def probe():
 
 
 def test_node_process_publishes_poses_and_moves_under_a_wrench(probe, tmp_path):
-    """The packaged wrenches scene, found by bare name, runs; a 10 N world force along x
-    from another process accelerates the cart along x only (no gravity in that scene)."""
+    """The packaged wrenches scene, found by bare name, runs.
+
+    A 10 N world force along x from another process accelerates the cart along x only (no gravity
+    in that scene).
+    """
     node, executor = probe
     process = start_node('-p', 'scene:=wrenches.yaml', cwd=tmp_path)
     try:
@@ -148,8 +153,11 @@ def run_lockstep(node, executor, cwd, calls, step_ticks=5):
 
 
 def test_lockstep_from_another_process_gives_bit_identical_poses(probe, tmp_path):
-    """Two runs of the default scene driven by ~/step alone (rate 0, started paused): the
-    same times, k x 5 ticks x 0.01 s, and bit for bit the same poses after every call."""
+    """Lockstep from another process gives bit identical poses.
+
+    Two runs of the default scene driven by ~/step alone (rate 0, started paused): the same times,
+    k x 5 ticks x 0.01 s, and bit for bit the same poses after every call.
+    """
     node, executor = probe
     first = run_lockstep(node, executor, tmp_path, calls=8)
     second = run_lockstep(node, executor, tmp_path, calls=8)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Scene files: every shipped scene builds, every mistake is refused with file, key and reason."""
 import copy
 import glob
@@ -11,7 +13,6 @@ import trimesh
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs
@@ -45,7 +46,7 @@ VALID = {
 
 
 def scene_with(change):
-    """A deep copy of the valid scene with ``change(data)`` applied."""
+    """Return a deep copy of the valid scene with ``change(data)`` applied."""
     data = copy.deepcopy(VALID)
     change(data)
     return data
@@ -62,8 +63,11 @@ def test_valid_scene_parses():
 
 
 def test_given_inertia_in_either_spelling_is_the_tensor_given():
-    """``given: {matrix: ..}`` (INTERFACE.md) and ``diagonal: ..`` both give the body exactly
-    the principal moments written, about its centre of mass."""
+    """Both spellings of a given inertia give the body exactly the moments written.
+
+    ``given: {matrix: ..}`` (README) and ``diagonal: ..`` give the principal moments written,
+    about the centre of mass.
+    """
     tensor = [[0.003, 0.001, 0.0], [0.001, 0.003, 0.0], [0.0, 0.0, 0.004]]   # moments 2, 4, 4
     nested = parse_scene(scene_with(put('bodies', 1, 'inertia', {'given': {'matrix': tensor}})))
     diagonal = {'diagonal': [0.002, 0.004, 0.004]}
@@ -103,8 +107,10 @@ def first_flip_of_free_plate(size, mass, omega_body, end):
 
 
 def test_default_scene_handle_flips_as_a_free_body():
-    """The default handle is torque-free (hung at its centre of mass): it flips about its
-    intermediate axis when Euler's equations say, with |L| constant."""
+    """The default handle is torque-free (hung at its centre of mass).
+
+    It flips about its intermediate axis when Euler's equations say, with |L| constant.
+    """
     world = build_world(load_scene(os.path.join(CONFIG, 'scenes', 'default.yaml')))
     flip = first_flip_of_free_plate((0.20, 0.10, 0.04), 0.5, [0.01, 6.0, 0.0], 5.0)
     handle = world.bodies.index('handle')
@@ -132,7 +138,7 @@ def test_only_listed_effects_are_built():
     assert effect_kinds(build_world(parse_scene(only_gravity))) == [Gravity.__name__]
     everything = build_world(parse_scene(copy.deepcopy(VALID)))
     assert effect_kinds(everything) == sorted(
-        cls.__name__ for cls in (Gravity, Damping, Springs, AppliedWrenches))
+        cls.__name__ for cls in (Gravity, Damping, Springs))
     no_springs = scene_with(put('effects', 'springs', []))
     assert Springs.__name__ not in effect_kinds(build_world(parse_scene(no_springs)))
     torque_free = build_world(load_scene(os.path.join(CONFIG, 'scenes', 'torque_free.yaml')))
@@ -142,7 +148,7 @@ def test_only_listed_effects_are_built():
 def test_wrench_input_mask_reaches_the_effect():
     """A body with wrench_input false is refused a wrench; the others accept one."""
     data = scene_with(lambda d: d['bodies'][1].update(wrench_input=False))
-    wrenches = build_world(parse_scene(data)).effect(AppliedWrenches)
+    wrenches = build_world(parse_scene(data)).inputs
     assert list(wrenches.torqued) == [True, False]
     assert wrenches.max_force == 100.0 and wrenches.max_torque == 10.0
 
@@ -198,7 +204,7 @@ def test_mesh_path_is_relative_to_the_scene_file(tmp_path, monkeypatch):
 
 
 def put(*path_and_value):
-    """A change that sets ``data[path...] = value``, making missing mappings on the way."""
+    """Return a change that sets ``data[path...] = value``, making missing mappings on the way."""
     *path, key, value = path_and_value
 
     def change(data):
@@ -209,7 +215,7 @@ def put(*path_and_value):
 
 
 def drop(*path):
-    """A change that deletes ``data[path...]``."""
+    """Return a change that deletes ``data[path...]``."""
     def change(data):
         for step in path[:-1]:
             data = data[step]
@@ -230,7 +236,7 @@ MISTAKES = [  # (change, key path named, reason)
     (put(*B0, 'twist', 'angular', [0, 0, 'fast']), 'bodies[0].twist.angular[2]',
      'expected a number'),
     (put(*B0, 'mass', '2.0'), 'bodies[0].mass', "expected a number, got the text '2.0'"),
-    (put(*B0, 'mass', '1e4'), 'bodies[0].mass', 'with a dot'),
+    (put(*B0, 'mass', '1e4'), 'bodies[0].mass', 'unquoted: 1.0e4'),
     (put(*B0, 'mass', True), 'bodies[0].mass', 'expected a number, got the boolean'),
     (put(*B0, 'mass', float('nan')), 'bodies[0].mass', 'must be finite'),
     (put(*B0, 'pose', 'position', [0, float('inf'), 0]), 'bodies[0].pose.position[1]',
@@ -318,7 +324,7 @@ def test_mistake_names_file_key_and_reason(change, key, reason):
 
 @pytest.mark.parametrize('text, key, reason', [
     ('bodies:\n  - name: box\n    shape: {type: box\n', 'line 4',
-     "invalid YAML: expected ',' or '}'"),
+     "invalid YAML: (did not find )?expected ',' or '}'"),
     ('bodies: []\nbodies: []\n', 'line 2', "invalid YAML: duplicate key 'bodies'"),
     ('bodies:\n  - {name: a, mass: 1, mass: 2}\n', 'line 2', "duplicate key 'mass'"),
     ('- name: box\n', '(document)', 'expected a mapping .*bodies.*got a list'),
@@ -343,7 +349,7 @@ def test_missing_file_is_refused(tmp_path):
     ('world', ('world', None)), ('', ('body', None)), ('box', ('body', None)),
     ('box/thruster', ('point', [0.2, 0.0, 0.0]))])
 def test_wrench_target_maps_frame_ids(frame_id, expected):
-    """frame_id picks the axes and the point a wrench acts at, as INTERFACE.md tabulates."""
+    """frame_id picks the axes and the point a wrench acts at, as the README tabulates."""
     box = parse_scene(copy.deepcopy(VALID)).bodies[0]
     frame, point = wrench_target(box, frame_id, 'world')
     assert frame == expected[0]

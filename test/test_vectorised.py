@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Stepping many bodies in one array is the same physics as stepping each body alone.
 
 Bodies that share no effect are independent systems, so a vectorised step over all of them
@@ -8,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
@@ -41,7 +43,7 @@ FRAMES = ('world', 'body', 'point', 'world_point', 'body')
 
 
 def build(members, integrator):
-    """A World of the bodies ``members`` (scene indices) with every effect acting on them."""
+    """Return a World of the bodies ``members`` (scene indices), every effect acting on them."""
     members = list(members)
     bodies = RigidBodies(tuple(f'b{i}' for i in members), MASS[members], INERTIA[members],
                          COM[members])
@@ -55,12 +57,12 @@ def build(members, integrator):
         specs.append(SpringSpec(members.index(PAIR[0]), np.array([0.0, 0.1, 0.0]), 15.0, 0.2,
                                 0.3, other=members.index(PAIR[1]),
                                 other_point=np.array([0.1, 0.0, 0.0])))
-    effects = [Gravity(bodies, (0.0, 0.0, -9.81)), Damping(bodies, 0.05, 0.02), wrenches,
+    effects = [Gravity(bodies, (0.0, 0.0, -9.81)), Damping(bodies, 0.05, 0.02),
                Springs(bodies, specs)]
     y = initial_state(bodies, ORIGIN[members], ORIENTATION[members], VELOCITY[members],
                       SPIN[members])
     return World(bodies, y, effects, integrator, tolerance=ADAPTIVE_TOLERANCE,
-                 auto_substep=False)
+                 auto_substep=False, inputs=wrenches)
 
 
 def advance(world):
@@ -71,8 +73,10 @@ def advance(world):
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_vectorised_step_equals_each_system_alone(name):
-    """Each independent body (and the spring-joined pair) ends where it would alone, to
-    round-off; the joined pair really interacts (its motion differs without the spring)."""
+    """Each independent body (and the spring-joined pair) ends where it would alone, to round-off.
+
+    The joined pair really interacts (its motion differs without the spring).
+    """
     together = advance(build(range(COUNT), name))
     systems = [PAIR] + [(i,) for i in range(COUNT) if i not in PAIR]
     agreement = ADAPTIVE_AGREEMENT if REGISTRY[name].adaptive else AGREEMENT

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Benchmarks behind the ``rigid_sim_bench`` console script, and what they share.
 
 Subcommands: ``accuracy`` (:mod:`.accuracy`), ``inertia`` (:mod:`.inertia_cost`),
@@ -56,7 +58,7 @@ def scientific(value, digits=2):
 
 
 def markdown_table(header, rows):
-    """A GitHub Markdown table from a header (K,) and rows of K strings.
+    """Return a GitHub Markdown table from a header (K,) and rows of K strings.
 
     A ``|`` inside a cell (``|omega|``, ``|L|``) is escaped, or it would split the column.
     """
@@ -82,7 +84,7 @@ def machine_description(extra_versions=()):
 
 
 def command_line():
-    """The command as typed, for the record."""
+    """Return the command as typed, for the record."""
     return 'rigid_sim_bench ' + ' '.join(sys.argv[1:])
 
 

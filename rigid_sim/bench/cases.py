@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark problems, each paired with an exact oracle for its state at the final time.
 
 Every case is one body of mass 1 kg with principal moments diag(1, 2, 3) kg m^2, starting at
@@ -11,17 +13,17 @@ steady spin about its major axis: closed form for both;
 ``offset_force``  a constant world force at a point off the centre of mass of a spinning
 body: the centre of mass follows the exact parabola, the rotation is a forced rigid body.
 
-Rotational oracles integrate Euler's equations and the quaternion kinematics with DOP853 at
-rtol = atol = 1e-13, once per process (cached).
+Rotational oracles are :func:`rigid_sim.bench.oracles.reference_motion` (Euler's equations
+and the quaternion kinematics by DOP853) at rtol = atol = 1e-13, once per process (cached).
 """
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
+from rigid_sim.bench import oracles
 from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.safeguards import UNIT_QUATERNION_SLACK
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -60,32 +62,36 @@ class Case:
     steps: tuple          # fixed steps to sweep, s, largest first
     torque_free: bool     # |L| is conserved
     primary: str          # 'orientation' or 'position': the error the plot shows
-    mujoco: bool          # MuJoCo can run it as a bare free body
+    mujoco: bool          # MuJoCo runs it too (see mujoco_baseline)
 
     def build(self, integrator, tolerance=1e-6):
-        """A fresh World running this case with the named integrator."""
+        """Return a fresh World running this case with the named integrator."""
         bodies = RigidBodies(('body',), np.array([MASS]), np.diag(MOMENTS)[None],
                              np.zeros((1, 3)))
         start, velocity = SPRING_START if self.key == 'spring' else (np.zeros(3), np.zeros(3))
         y0 = initial_state(bodies, [start], [IDENTITY], [velocity], [self.omega0])
         # The bare method: the benchmark measures each integrator, not the safeguards.
-        return World(bodies, y0, self._effects(bodies), integrator=integrator,
-                     tolerance=tolerance, auto_substep=False)
+        effects, inputs = self._effects_and_inputs(bodies)
+        return World(bodies, y0, effects, integrator=integrator, tolerance=tolerance,
+                     auto_substep=False, inputs=inputs)
 
-    def _effects(self, bodies):
+    def _effects_and_inputs(self, bodies):
+        """The case's effects and its held wrenches (None: no input)."""
         if self.key == 'spring':
             spec = SpringSpec(body=0, point=np.zeros(3), stiffness=SPRING_STIFFNESS,
                               damping=SPRING_DAMPING, anchor=np.zeros(3))
-            return [Springs(bodies, [spec])]
+            return [Springs(bodies, [spec])], None
         if self.key == 'offset_force':
             push = AppliedWrenches(bodies)
             push.hold(0, 'push', 'world_point', PUSH_FORCE, point=PUSH_POINT)
-            return [push]
-        return []
+            return [], push
+        return [], None
 
     def energy(self, world):
-        """Energy this case tracks, J; for ``offset_force`` the conserved
-        ``H = M v^2 / 2 + omega.L / 2 - F.(x + R r)``."""
+        """Energy this case tracks, J.
+
+        For ``offset_force`` the conserved ``H = M v^2 / 2 + omega.L / 2 - F.(x + R r)``.
+        """
         if self.key != 'offset_force':
             return world.energy()
         snapshot = world.snapshot()
@@ -93,7 +99,7 @@ class Case:
         return float(snapshot.kinetic_energy()[0] - PUSH_FORCE @ point)
 
     def oracle(self):
-        """The exact final state (cached per process)."""
+        """Return the exact final state (cached per process)."""
         return _oracle(self)
 
 
@@ -114,7 +120,7 @@ class Result:
     cpu_time: float           # s, median of the repeats
 
     def error(self, kind):
-        """The error the plot uses for a case: 'orientation' or 'position'."""
+        """Return the error the plot uses for a case: 'orientation' or 'position'."""
         return getattr(self, kind + '_error')
 
 
@@ -144,32 +150,9 @@ def score(case, method, setting, adaptive, final, start, evaluations, cpu_time):
                   evaluations, cpu_time)
 
 
-def _rigid_body_slope(body_torque):
-    """``d/dt [q, L_b]`` of a rigid body given the body-axes torque as a function of ``q``."""
-    def slope(time, state):
-        q, body_l = state[:4], state[4:]
-        omega_body = body_l / MOMENTS
-        dq = 0.5 * rotation.multiply(q[None], np.append(omega_body, 0.0)[None])[0]
-        return np.concatenate((dq, body_torque(q) - np.cross(omega_body, body_l)))
-    return slope
-
-
-def _no_torque(q):
-    return np.zeros(3)
-
-
-def _push_torque(q):
-    """``r x R^T F``: the held world force at the body point, in body axes."""
-    return np.cross(PUSH_POINT, rotation.to_matrix(q[None])[0].T @ PUSH_FORCE)
-
-
-def integrate_rotation(omega0, duration, body_torque=_no_torque):
-    """Orientation (4,) and body angular momentum (3,) at ``duration`` by DOP853 at 1e-13."""
-    start = np.concatenate((IDENTITY, MOMENTS * np.asarray(omega0, dtype=float)))
-    solution = solve_ivp(_rigid_body_slope(body_torque), (0.0, duration), start,
-                         method='DOP853', rtol=ORACLE_TOLERANCE, atol=ORACLE_TOLERANCE)
-    final = solution.y[:, -1]
-    return final[:4] / np.linalg.norm(final[:4]), final[4:]
+def _push_wrench(time, x, v, q, omega_body):
+    """Return the held world force and its torque ``r x R^T F`` in body axes."""
+    return PUSH_FORCE, np.cross(PUSH_POINT, oracles.world_from_body(q).T @ PUSH_FORCE)
 
 
 def _spring_motion(time):
@@ -196,9 +179,12 @@ def _oracle(case):
         q = rotation.exp_map(omega0[None] * t)[0]
         energy = rotational + 0.5 * MASS * v @ v + 0.5 * SPRING_STIFFNESS * x @ x
         return Reference(x, q, omega0, energy)
-    torque = _push_torque if case.key == 'offset_force' else _no_torque
-    q, body_l = integrate_rotation(omega0, t, torque)
-    omega = rotation.to_matrix(q[None])[0] @ (body_l / MOMENTS)
+    wrench = _push_wrench if case.key == 'offset_force' else oracles.no_wrench
+    start = (np.zeros(3), np.zeros(3), IDENTITY, omega0)
+    _, _, q, omega_body = oracles.reference_motion(MASS, np.diag(MOMENTS), start, [t], wrench,
+                                                   ORACLE_TOLERANCE, ORACLE_TOLERANCE)
+    q = q[-1]
+    omega = oracles.world_from_body(q) @ omega_body[-1]
     position = np.zeros(3)
     energy = rotational
     if case.key == 'offset_force':
@@ -218,8 +204,8 @@ CASES = (
          20.0, (0.1, 50.0, 0.1), LONG_STEPS + FIXED_STEPS[2:] + (5e-4, 2e-4), True,
          'orientation', True),
     Case('spring', 'spring-damper at the centre of mass (1 Hz, zeta 0.016), spin about axis 3',
-         10.0, (0.0, 0.0, 1.0), FIXED_STEPS, False, 'position', False),
+         10.0, (0.0, 0.0, 1.0), FIXED_STEPS, False, 'position', True),
     Case('offset_force', 'constant world force at an offset point, omega0 = (0.3, 0.2, 4)',
-         10.0, (0.3, 0.2, 4.0), FIXED_STEPS, False, 'orientation', False),
+         10.0, (0.3, 0.2, 4.0), FIXED_STEPS, False, 'orientation', True),
 )
 CASES_BY_KEY = {case.key: case for case in CASES}

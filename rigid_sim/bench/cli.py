@@ -1,22 +1,26 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench``: the benchmark console script (entry point ``cli:main``)."""
 import argparse
 import sys
 
-from rigid_sim.bench import (MissingPackage, accuracy, imu_cost, inertia_cost, node_rate,
-                             stability, throughput)
+from rigid_sim.bench import (MissingPackage, accuracy, flood, imu_cost, inertia_cost,
+                             node_rate, stability, startup, throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
+    ('flood', flood, 'a flood of wrench messages: real-time factor with and without'),
     ('imu', imu_cost, 'the cost of an IMU per published reading, and of none'),
     ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
     ('node', node_rate, 'the node at scale: real-time factor and tick time against N'),
     ('stability', stability, 'the hard cases through every integrator'),
+    ('startup', startup, 'process start to the first step, with and without compiled kernels'),
     ('throughput', throughput, 'CPU time per body-step against the number of bodies'),
 )
 
 
 def build_parser():
-    """The argument parser of every subcommand."""
+    """Return the argument parser of every subcommand."""
     parser = argparse.ArgumentParser(
         prog='rigid_sim_bench', description='rigid_sim benchmarks: what accuracy costs in time.')
     commands = parser.add_subparsers(dest='command', required=True)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench inertia``: inertia-tensor estimates, their error and their time.
 
 Bounding box, point sampling (plain random and scrambled Sobol, N = 1e2 .. 1e6) and the exact
@@ -61,7 +63,7 @@ def estimators(mesh, counts):
 
 
 def planned_runs(label, count, previous, repeats, budget):
-    """Runs to time for the next sample count, 0 to skip it; its estimated seconds per run.
+    """Return the runs to time for the next sample count (0: skip it) and seconds per run.
 
     Cost grows in proportion to N. When ``repeats`` runs would exceed the budget but one
     fits, one run is timed: a run that long varies far less than between methods.
@@ -98,7 +100,7 @@ def rows_for(name, mesh, analytic, counts, repeats, budget):
 
 
 def report(counts, repeats, budget):
-    """The Markdown section of the inertia benchmark."""
+    """Return the Markdown section of the inertia benchmark."""
     rows, skipped = [], []
     for name, mesh, analytic in shapes():
         shape_rows, shape_skipped = rows_for(name, mesh, analytic, counts, repeats, budget)

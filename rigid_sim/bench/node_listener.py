@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The listener process of ``rigid_sim_bench node``: counts the messages on given topics.
 
 ``python -m rigid_sim.bench.node_listener TOPIC...``; a topic's last name (``pose``,
@@ -8,8 +10,9 @@ It runs in its own process so that the node under test, which only fills and sen
 that have subscribers, pays for publishing as it would to a real user, and so that receiving
 does not take CPU time from the node's thread. Messages arrive serialised (``raw=True``):
 counting needs no Python message objects, so the listener keeps up with what it is sent.
-The EventsExecutor's ``spin_once`` handles ~60k callbacks/s whatever the number of
-subscriptions, where the SingleThreadedExecutor manages ~625/s with 100 (ROS_NOTES).
+The EventsExecutor's ``spin_once`` keeps its callback rate whatever the number of
+subscriptions, where the SingleThreadedExecutor's falls with every subscription
+(docs/ros_notes.md).
 """
 import json
 import sys
@@ -26,7 +29,7 @@ QUEUE_DEPTH = 10   # the node's; a listener that fell behind would lose messages
 
 
 def message_type(topic):
-    """The message class of ``topic``, from its last name."""
+    """Return the message class of ``topic``, from its last name."""
     return TYPES[topic.rsplit('/', 1)[-1]]
 
 
@@ -37,7 +40,7 @@ def answer_requests(counts):
 
 
 def counter(counts, topic):
-    """A subscription callback that adds one to ``counts[topic]``."""
+    """Return a subscription callback that adds one to ``counts[topic]``."""
     def count(_serialised):
         counts[topic] += 1
     return count

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench node``: the node at scale, real-time factor and tick time against N.
 
 The node (:class:`rigid_sim.node.RigidSimNode`, every tick timed) spins in a
@@ -32,7 +34,7 @@ from rigid_sim.node import RigidSimNode
 
 SECTION = 'rigid_sim_bench node'
 WRENCH_INPUT_LIMIT = 100   # from this N on, no wrench subscriptions (see the module text)
-MATCH_TIMEOUT = 30.0       # s; discovery takes 0.3-3.7 s, longer with thousands of endpoints
+MATCH_TIMEOUT = 30.0       # s; discovery takes seconds, more with thousands of endpoints
 STOP_TIMEOUT = 5.0         # s the listener gets to exit after SIGINT
 GOAL_RTF = 0.99            # a 1 kHz wall-clock timer cannot average above 1; see the report
 DURATION, WARMUP = 5.0, 1.0   # s of wall time
@@ -95,7 +97,7 @@ def claimed_topics(node, config):
 
 @contextlib.contextmanager
 def ros_environment():
-    """This run's ROS settings in ``os.environ`` (restored on exit); yields the log dir."""
+    """Set this run's ROS settings in ``os.environ`` (restored on exit); yield the log dir."""
     saved = dict(os.environ)
     log_dir = tempfile.mkdtemp(prefix='rigid_sim_bench_node_')
     for deprecated_or_widening in ('ROS_LOCALHOST_ONLY', 'ROS_STATIC_PEERS'):
@@ -219,7 +221,7 @@ def table(results):
 
 
 def physics_step(config):
-    """The step the integrator is given, s (the World may split it further)."""
+    """Return the step the integrator is given, s (the World may split it further)."""
     return config.time_step / config.substeps
 
 
@@ -242,7 +244,7 @@ def goals(results):
 
 
 def report(results, seconds):
-    """The Markdown section: how it was measured, the table, the goals."""
+    """Return the Markdown section: how it was measured, the table, the goals."""
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]   # this benchmark times wall clock
     return '\n'.join([

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench stability``: the hard cases, run long, through every integrator.
 
 Each case is a world with a known energy history (constant, or ``exp(-2 c t)`` under
@@ -13,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rigid_sim import bench
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
@@ -32,10 +34,11 @@ SECTION = 'rigid_sim_bench stability'
 
 def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_substep=True,
           mass=1.0, scale=1.0, position=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0),
-          orientation=IDENTITY, com=(0.0, 0.0, 0.0)):
-    """A world of bodies with principal moments ``mass scale^2 moments`` (N, 3), kg m^2.
+          orientation=IDENTITY, com=(0.0, 0.0, 0.0), inputs=None):
+    """Return a world of bodies with principal moments ``mass scale^2 moments`` (N, 3), kg m^2.
 
-    ``effects`` is a list of callables ``bodies -> effect``; ``omega`` (N, 3) rad/s, world.
+    ``effects`` is a list of callables ``bodies -> effect``, ``inputs`` one
+    ``bodies -> AppliedWrenches`` (None: no input); ``omega`` (N, 3) rad/s, world.
     """
     moments = np.atleast_2d(np.asarray(moments, dtype=float))
     count = len(moments)
@@ -49,7 +52,7 @@ def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_subste
     y0 = initial_state(bodies, rows(position, 3), rows(orientation, 4), rows(velocity, 3),
                        rows(omega, 3))
     return World(bodies, y0, [make(bodies) for make in effects], integrator,
-                 auto_substep=auto_substep)
+                 auto_substep=auto_substep, inputs=None if inputs is None else inputs(bodies))
 
 
 def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):
@@ -62,7 +65,7 @@ def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):
 
 
 def pushed(force, point, max_force=1e4, max_torque=1e4, expires=np.inf):
-    """Effect builder: a world-axes ``force`` held at body point ``point``, until ``expires``."""
+    """Inputs builder: a world-axes ``force`` held at body point ``point``, until ``expires``."""
     def make(bodies):
         wrenches = AppliedWrenches(bodies, max_force, max_torque)
         wrenches.hold(0, 'push', 'world_point', force, point=point, expires=expires)
@@ -91,23 +94,23 @@ class HardCase:
     extra_energy: object = None  # world -> J added to world.energy() (a held force's potential)
 
     def energy(self, world_):
-        """The energy this case conserves (or whose decay it knows), J."""
+        """Return the energy this case conserves (or whose decay it knows), J."""
         extra = self.extra_energy(world_) if self.extra_energy else 0.0
         return world_.energy() + extra
 
     def exact(self, time_, energy0):
-        """The exact energy at ``time_``, J."""
+        """Return the exact energy at ``time_``, J."""
         return self.exact_energy(time_, energy0) if self.exact_energy else energy0
 
 
 def fast_spin_case(omega_dt):
-    """A body spun at 30 rad/s with a force at a point, stepped at ``|omega| dt``."""
+    """Return a body spun at 30 rad/s with a force at a point, stepped at ``|omega| dt``."""
     force, point = np.array([0.0, 0.0, -20.0]), np.array([0.1, 0.05, 0.0])
     return HardCase(
         f'fast_spin_{omega_dt:g}', f'fast spin, |omega| dt = {omega_dt:g}, offset force',
         omega_dt / 30.0, 1.0, 10.0, lambda name, auto: world(
             [1.0, 2.0, 3.0], np.array([3.0, -20.0, 22.0]) * 30.0 / np.sqrt(893.0),
-            [pushed(force, point)], name, auto, orientation=TILTED),
+            (), name, auto, orientation=TILTED, inputs=pushed(force, point)),
         torque_free=False, extra_energy=lambda w: point_potential(w, force, point))
 
 
@@ -121,17 +124,18 @@ def scaled_case(key, mass, size, limit):
     return HardCase(
         key, f'{mass:g} kg body of size {size:g} m, spring + push, |omega| dt = 0.5',
         0.05, 2.0, 20.0, lambda name, auto: world(
-            [1.0, 2.0, 3.0], [4.0, -6.0, 7.0], [
-                spring(100.0 * mass, point=np.array([0.0, 0.3, 0.1]) * size),
-                pushed(force, point, limit, limit * size)],
+            [1.0, 2.0, 3.0], [4.0, -6.0, 7.0],
+            [spring(100.0 * mass, point=np.array([0.0, 0.3, 0.1]) * size)],
             name, auto, mass=mass, scale=size, position=np.array([1.0, 0.0, 0.0]) * size,
-            orientation=TILTED),
+            orientation=TILTED, inputs=pushed(force, point, limit, limit * size)),
         torque_free=False, extra_energy=lambda w: point_potential(w, force, point))
 
 
 def impulse_case():
-    """A body at rest kicked by a body-axes torque about its z axis for exactly one step, of
-    ``tau = 2 pi I3 / dt^2``: it turns by ``tau dt^2 / 2 I3 = pi`` within that step."""
+    """Return a body at rest kicked by a body-axes torque about z for exactly one step.
+
+    The torque ``tau = 2 pi I3 / dt^2`` turns it by ``tau dt^2 / 2 I3 = pi`` within that step.
+    """
     dt, moment = 0.01, 3.0
     torque = 2.0 * np.pi * moment / dt ** 2
     work = torque * np.pi   # J: the energy from the end of the kick on
@@ -141,14 +145,17 @@ def impulse_case():
         wrenches.hold(0, 'kick', 'body', np.zeros(3), (0.0, 0.0, torque), expires=dt)
         return wrenches
     return HardCase('impulse', 'impulsive torque: a turn of pi in one step', dt, 0.5, 10.0,
-                    lambda name, auto: world([1.0, 2.0, moment], np.zeros(3), [make], name,
-                                             auto, orientation=TILTED),
+                    lambda name, auto: world([1.0, 2.0, moment], np.zeros(3), (), name,
+                                             auto, orientation=TILTED, inputs=make),
                     torque_free=False, exact_energy=lambda t, e0: e0 if t < dt / 2 else work)
 
 
 def far_mesh_case(offset=1e4):
-    """A unit box whose frame origin is ``offset`` sizes from it, its mass properties from
-    ``mesh_exact``; spinning torque-free, so its centre of mass stays put."""
+    """Return a unit box whose frame origin is ``offset`` sizes from it.
+
+    Its mass properties come from ``mesh_exact``; it spins torque-free, so its centre of mass
+    stays put.
+    """
     import trimesh
     from rigid_sim.core.inertia import mesh_exact
     box = trimesh.creation.box((1.0, 2.0, 3.0))

@@ -75,9 +75,10 @@ def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
 
 
 def with_pose(bodies, y, index, origin, orientation):
-    """A new state with body ``index``'s frame at ``origin`` (3,) m and ``orientation`` (4,).
+    """Return a new state with body ``index``'s frame at a new pose.
 
-    The body keeps its twist (velocity of its frame origin and angular velocity, world
+    The frame origin goes to ``origin`` (3,) m, its axes to ``orientation`` (4,). The body
+    keeps its twist (velocity of its frame origin and angular velocity, world
     axes). ValueError, nothing changed, for a non-finite value or a quaternion further than
     ``UNIT_QUATERNION_TOLERANCE`` from unit length (within it, it is normalised).
     """
@@ -88,10 +89,11 @@ def with_pose(bodies, y, index, origin, orientation):
 
 
 def with_twist(bodies, y, index, velocity, angular_velocity):
-    """A new state with body ``index``'s frame origin moving at ``velocity`` (3,) m/s and
-    turning at ``angular_velocity`` (3,) rad/s, both world axes; its pose is kept.
+    """Return a new state with body ``index``'s frame moving as given, its pose kept.
 
-    ValueError, nothing changed, for a non-finite value.
+    The frame origin moves at ``velocity`` (3,) m/s and the body turns at
+    ``angular_velocity`` (3,) rad/s, both world axes. ValueError, nothing changed, for a
+    non-finite value.
     """
     velocity = _finite('linear velocity', velocity, 3)
     angular_velocity = _finite('angular velocity', angular_velocity, 3)

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Mass, centre of mass and inertia of shapes and meshes, exact and estimated.
 
 Every result is a :class:`MassProperties`: the inertia is about the centre of mass, in body
@@ -15,11 +17,17 @@ from scipy.stats import qmc
 import trimesh
 from trimesh.ray import ray_util
 
+from rigid_sim.core.scene_file import check_file, FileRefused
+from rigid_sim.core.text import clipped
+
 # Relative asymmetry |I - I^T| / max|I| above this is a typing mistake, not round-off.
 SYMMETRY_RTOL = 1e-6
 # Principal-moment triangle inequality slack, relative to the trace: a flat plate has
 # I1 + I2 = I3 exactly, and its mesh integrals may miss that by round-off.
 TRIANGLE_RTOL = 1e-9
+# kg m^2. A smaller principal moment (a 1 um steel ball has 4e-30) has an inverse that
+# turns any torque into an overflowing spin; 5e-324 typed for 0.004 would be inf.
+MIN_MOMENT = 1e-30
 SEQUENCES = ('sobol', 'random')
 # Inside test ray: tilted off z so it never runs along the faces of axis-aligned meshes.
 RAY_DIRECTION = np.array([1e-3, 2e-3, 1.0])
@@ -64,7 +72,8 @@ def check_inertia(inertia):
     -------
     inertia : (3, 3) float
         The tensor, symmetrised to remove round-off. ValueError names the failed check
-        (finite 3x3, symmetric, positive definite, triangle inequality) and the values.
+        (finite 3x3, symmetric, positive definite, at least MIN_MOMENT, triangle inequality)
+        and the values.
     """
     inertia = np.asarray(inertia, dtype=float)
     if inertia.shape != (3, 3) or not np.all(np.isfinite(inertia)):
@@ -79,6 +88,9 @@ def check_inertia(inertia):
     if moments[0] <= 0:
         raise ValueError(f'inertia is not positive definite: principal moments '
                          f'{moments.tolist()}')
+    if moments[0] < MIN_MOMENT:
+        raise ValueError(f'inertia has a principal moment of {moments[0]:.3g} kg m^2, below '
+                         f'{MIN_MOMENT:g}: its inverse would overflow the angular velocity')
     if moments[0] + moments[1] < moments[2] - TRIANGLE_RTOL * moments.sum():
         raise ValueError(f'inertia violates the triangle inequality I1 + I2 >= I3 of principal '
                          f'moments {moments.tolist()}: no physical mass distribution has it')
@@ -128,7 +140,7 @@ def load_mesh(path, scale=1.0):
     Parameters
     ----------
     path : str
-        Mesh file.
+        Mesh file: a regular file (a FIFO or device is refused before it is opened).
     scale : float or (3,) float
         Uniform or per-axis scale, > 0.
 
@@ -137,8 +149,12 @@ def load_mesh(path, scale=1.0):
     mesh : trimesh.Trimesh
         Vertices merged (so an STL can be watertight); closure is checked where it is used.
     """
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f'mesh file not found: {path}')
+    if not os.path.lexists(path):
+        raise FileNotFoundError(f'mesh file not found: {clipped(path)}')
+    try:
+        check_file(path, math.inf, f'mesh file {clipped(path)}')
+    except FileRefused as refused:
+        raise ValueError(refused.reason) from None
     scale = np.broadcast_to(np.asarray(scale, dtype=float), (3,))
     for factor in scale:
         _positive(factor, 'mesh scale')
@@ -148,16 +164,16 @@ def load_mesh(path, scale=1.0):
     except Exception as error:
         # trimesh's readers raise whatever a malformed file trips (IndexError for a short
         # OBJ vertex, KeyError for a PLY without y, ...): refuse the file by name instead.
-        raise ValueError(f'cannot read mesh file {path}: {type(error).__name__}: {error}') \
-            from None
+        raise ValueError(f'cannot read mesh file {clipped(path)}: {type(error).__name__}: '
+                         f'{clipped(error)}') from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise ValueError(f'no triangles in mesh file {path}')
+        raise ValueError(f'no triangles in mesh file {clipped(path)}')
     mesh.apply_transform(np.diag(np.append(scale, 1.0)))
     return mesh
 
 
 def _check_closed(mesh):
-    """ValueError unless ``mesh`` bounds a solid; never repaired, as a repair guesses."""
+    """Raise ValueError unless ``mesh`` bounds a solid; never repaired, as a repair guesses."""
     if not mesh.is_watertight:
         raise ValueError('mesh is not watertight (it has open edges): it bounds no volume')
     if not mesh.is_winding_consistent:
@@ -315,7 +331,8 @@ def given(mass, center_of_mass=(0.0, 0.0, 0.0), diagonal=None, matrix=None):
     return MassProperties(_positive(mass, 'mass'), center_of_mass, check_inertia(matrix))
 
 
-def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_dir='.'):
+def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_dir='.',
+                          mesh=None):
     """Mass properties of a scene body from its shape and inertia method.
 
     Parameters
@@ -330,9 +347,13 @@ def shape_mass_properties(shape, inertia_method, mass=None, density=None, base_d
         mass is then the shape's and a density multiplies the shape's volume.
     mass, density : float
         Exactly one: kg, or kg/m^3.
+    base_dir : str
+        Directory a mesh ``file`` is relative to (the scene file's).
+    mesh : trimesh.Trimesh, optional
+        The mesh of a mesh shape, already loaded (and scaled); it is not modified.
     """
-    solid = shape
-    if shape.get('type') == 'mesh':
+    solid = shape if mesh is None else mesh
+    if shape.get('type') == 'mesh' and mesh is None:
         solid = load_mesh(os.path.join(base_dir, shape['file']), shape.get('scale', 1.0))
     exact = mesh_exact if isinstance(solid, trimesh.Trimesh) else _primitive
     has_given = 'diagonal' in inertia_method or 'matrix' in inertia_method

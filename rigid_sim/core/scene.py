@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Scene files: YAML -> a validated :class:`Scene` -> a :class:`~rigid_sim.core.world.World`.
 
 The format is the "Scene file" section of the package's interface page, written down once
@@ -7,14 +9,12 @@ what it says or nothing at all. Only the effects a scene lists are built: an unl
 costs nothing while stepping.
 """
 import os
-from collections.abc import Hashable
 from dataclasses import dataclass
 
 import numpy as np
-import yaml
 
 from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import (
+from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
@@ -25,8 +25,11 @@ from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
 from rigid_sim.core.scene_fields import (
-    ABSENT, choice, describe, fields, list_of, matrix, Mistake, non_negative, of_type, points,
-    positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
+    ABSENT, choice, count, describe, fields, list_of, matrix, Mistake, non_negative, of_type,
+    points, positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
+from rigid_sim.core.scene_file import FileRefused, load_yaml
+from rigid_sim.core.scene_limits import Budget, WORK_LIMITS
+from rigid_sim.core.text import clipped, shown
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
 # Spring ends closer than this fraction of the rest length count as one point.
@@ -37,7 +40,7 @@ class SceneError(ValueError):
     """A scene mistake; ``str()`` is ``"<file>: <key path>: <reason>"``."""
 
     def __init__(self, path, key, reason):
-        super().__init__(f'{path}: {key}: {reason}')
+        super().__init__(f'{clipped(path)}: {clipped(key)}: {clipped(reason, 2000)}')
         self.path, self.key, self.reason = path, key, reason
 
 
@@ -81,7 +84,7 @@ SHAPES = {
 }
 GIVEN = {'diagonal': (vector, ABSENT), 'matrix': (matrix, ABSENT)}
 INERTIA = {'method': (choice(*INERTIA_METHODS), ABSENT),
-           'samples': (of_type(int, 'a whole number of samples'), ABSENT),
+           'samples': (count, ABSENT),
            'given': (table(GIVEN), ABSENT), **GIVEN}
 ZERO = [0.0, 0.0, 0.0]
 # Shape and inertia arrive raw: their valid keys depend on their type, checked in _body.
@@ -102,32 +105,37 @@ EFFECTS = {'gravity': (table({'acceleration': (vector, REQUIRED)}), ABSENT),
            'springs': (list_of(table(SPRING), 'springs'), ABSENT)}
 SCENE = {'world_frame': (token, 'world'),
          'limits': (table({'max_force': (positive, DEFAULT_MAX_FORCE),
-                           'max_torque': (positive, DEFAULT_MAX_TORQUE)}), {}),
+                           'max_torque': (positive, DEFAULT_MAX_TORQUE),
+                           **{name: (count, default)
+                              for name, default in WORK_LIMITS.items()}}), {}),
          'effects': (table(EFFECTS), {}),
          # Raw here; _body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
 
 
 def _shape(value, key, base_dir):
-    """Validated shape dict; a mesh file is resolved against the scene's directory."""
+    """Validate a shape dict; a mesh file is resolved against the scene's directory."""
     kind = value.get('type') if isinstance(value, dict) else None
-    if kind not in SHAPES:
+    if not isinstance(kind, str) or kind not in SHAPES:
         where = f'{key}.type' if isinstance(value, dict) else key
         raise Mistake(where, f'expected a shape type in {tuple(SHAPES)}, got '
                              f'{describe(kind if where != key else value)}')
     shape = fields(value, key, {'type': (raw, REQUIRED), **SHAPES[kind]})
     if kind == 'mesh':
-        shape['file'] = os.path.abspath(os.path.join(base_dir, shape['file']))
-        if not os.path.isfile(shape['file']):
-            raise Mistake(f'{key}.file', f'mesh not found: {shape["file"]} (a relative '
-                                         "path starts at the scene file's directory)")
+        try:
+            shape['file'] = os.path.abspath(os.path.join(base_dir, shape['file']))
+        except ValueError as error:  # an embedded NUL
+            raise Mistake(f'{key}.file', str(error)) from None
+        if not os.path.lexists(shape['file']):
+            raise Mistake(f'{key}.file', f'mesh not found: {clipped(shape["file"])} (a '
+                                         "relative path starts at the scene file's directory)")
     return shape
 
 
 def _inertia(value, key):
-    """Validated inertia method; a diagonal or matrix without a method means 'given'.
+    """Validate an inertia method; a diagonal or matrix without a method means 'given'.
 
-    ``given: {diagonal: [..]}`` (or ``matrix``), as INTERFACE.md writes it, is the same as
+    ``given: {diagonal: [..]}`` (or ``matrix``), as the README writes it, is the same as
     ``{method: given, diagonal: [..]}``.
     """
     inertia = fields(value, key, INERTIA)
@@ -148,8 +156,6 @@ def _inertia(value, key):
                            "other methods take neither")
     if (method == 'sampling') != ('samples' in inertia):
         raise Mistake(f'{key}.samples', "method 'sampling' needs samples, others take none")
-    if inertia.get('samples', 1) < 1:
-        raise Mistake(f'{key}.samples', f'must be positive, got {inertia["samples"]}')
     for name in given:
         try:
             check_inertia(np.diag(inertia[name]) if name == 'diagonal' else inertia[name])
@@ -158,17 +164,20 @@ def _inertia(value, key):
     return inertia
 
 
-def _body(value, key, base_dir):
-    """One :class:`BodySpec` from its scene entry."""
+def _body(value, key, budget):
+    """One :class:`BodySpec` from its scene entry, within the scene's work ``budget``."""
     body = fields(value, key, BODY)
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
         raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
-    shape = _shape(body['shape'], f'{key}.shape', base_dir)
+    shape = _shape(body['shape'], f'{key}.shape', budget.base_dir)
     inertia = _inertia(body['inertia'], f'{key}.inertia')
+    mesh = budget.mesh(shape, f'{key}.shape') if shape['type'] == 'mesh' else None
+    if inertia['method'] == 'sampling':
+        budget.draw_samples(inertia['samples'], f'{key}.inertia.samples')
     try:
-        properties = shape_mass_properties(shape, inertia, base_dir=base_dir, **amount)
-    except (ValueError, OSError) as error:
+        properties = shape_mass_properties(shape, inertia, mesh=mesh, **amount)
+    except Exception as error:  # trimesh and scipy on a user's mesh: any error refuses it
         # Given tensors are checked already: what fails here is the mesh, or too few samples.
         blamed = 'inertia.samples' if inertia['method'] == 'sampling' else 'shape'
         raise Mistake(f'{key}.{blamed}', str(error)) from None
@@ -180,25 +189,30 @@ def _body(value, key, base_dir):
         imu=parse_imu(body['imu'], f'{key}.imu', body['points']) if 'imu' in body else None)
 
 
-def _bodies(entries, world_frame, base_dir):
+def _bodies(entries, world_frame, budget):
     """All bodies, with unique names and point names that do not shadow a frame."""
     if not entries:
         raise Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
-    bodies = tuple(_body(entry, f'bodies[{i}]', base_dir) for i, entry in enumerate(entries))
+    if len(entries) > budget.limits['max_bodies']:
+        raise Mistake('bodies', f'{len(entries)} bodies, above the limit of '
+                                f'{budget.limits["max_bodies"]} (raise limits.max_bodies)')
+    bodies = tuple(_body(entry, f'bodies[{i}]', budget) for i, entry in enumerate(entries))
     names = [body.name for body in bodies]
+    first = {}
     for i, name in enumerate(names):
         # A wrench's frame_id names world axes or a body's axes; one name cannot be both.
         if name == world_frame:
             raise Mistake(f'bodies[{i}].name', f'body name {name!r} is the world_frame')
-        if name in names[:i]:
+        if name in first:
             raise Mistake(f'bodies[{i}].name', f'duplicate body name {name!r} '
-                                               f'(also bodies[{names.index(name)}])')
-    frames = sorted(set(names) | {world_frame})
+                                               f'(also bodies[{first[name]}])')
+        first[name] = i
+    frames = set(names) | {world_frame}
     for i, body in enumerate(bodies):
         for point in body.points:
             if point in frames:
                 raise Mistake(f'bodies[{i}].points.{point}', f'point name {point!r} is '
-                              f'already a frame name (bodies and world_frame: {frames})')
+                              'already a frame name (a body or the world_frame)')
     return bodies
 
 
@@ -209,8 +223,10 @@ def _end_in_world(body, point):
 
 
 def _check_spring_ends_apart(spec, key, bodies):
-    """A spring with a rest length must not start with both ends at one point: its force
-    ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero)."""
+    """Refuse a spring with a rest length whose ends start at one point.
+
+    Its force ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero).
+    """
     if spec.rest_length == 0.0:
         return
     start = _end_in_world(bodies[spec.body], spec.point)
@@ -222,7 +238,7 @@ def _check_spring_ends_apart(spec, key, bodies):
 
 
 def _spring(spring, key, names):
-    """A :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
+    """Return a :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
     if ('anchor' in spring) == ('other' in spring):
         raise Mistake(key, 'give exactly one of anchor (a world point) or other (a body)')
     if 'other_point' in spring and 'other' not in spring:
@@ -247,7 +263,9 @@ def parse_scene(data, path='<memory>', base_dir='.'):
     """
     try:
         scene = fields(data, '', SCENE)
-        bodies = _bodies(scene['bodies'], scene['world_frame'], base_dir)
+        limits = scene['limits']
+        budget = Budget({name: limits.pop(name) for name in WORK_LIMITS}, base_dir)
+        bodies = _bodies(scene['bodies'], scene['world_frame'], budget)
         effects = dict(scene['effects'])
         names = [body.name for body in bodies]
         springs = tuple(_spring(spring, f'effects.springs[{i}]', names)
@@ -262,43 +280,17 @@ def parse_scene(data, path='<memory>', base_dir='.'):
                  effects=effects, **scene['limits'])
 
 
-class _SceneLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, refusing a key given twice in one mapping (it keeps the last)."""
-
-    def construct_mapping(self, node, deep=False):
-        seen = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            if not isinstance(key, Hashable):
-                continue  # the base class refuses it, saying so
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f'duplicate key {key!r}', key_node.start_mark)
-            seen.add(key)
-        return super().construct_mapping(node, deep)
-
-
-def _where(mark):
-    return f'line {mark.line + 1}, column {mark.column + 1}'
-
-
 def load_scene(path):
     """Read and validate the scene file at ``path``; see :func:`parse_scene`.
 
-    Loads with PyYAML's safe loader (no arbitrary objects), made to refuse duplicate keys.
+    Loads with PyYAML's safe loader (no arbitrary objects, YAML 1.2 floats), made to refuse
+    duplicate keys, after the checks of :mod:`rigid_sim.core.scene_file`: a regular file of
+    at most MAX_SCENE_BYTES of UTF-8, nested at most MAX_DEPTH deep, at most MAX_NODES nodes.
     """
     try:
-        with open(path, encoding='utf-8') as stream:
-            data = yaml.load(stream, Loader=_SceneLoader)
-    except OSError as error:
-        raise SceneError(path, '(file)', error.strerror or str(error)) from None
-    except yaml.MarkedYAMLError as error:
-        context = (f' ({error.context} from {_where(error.context_mark)})'
-                   if error.context and error.context_mark else '')
-        raise SceneError(path, _where(error.problem_mark),
-                         f'invalid YAML: {error.problem}{context}') from None
-    except yaml.YAMLError as error:
-        raise SceneError(path, '(file)', f'invalid YAML: {error}') from None
+        data = load_yaml(path)
+    except FileRefused as refused:
+        raise SceneError(path, refused.where, refused.reason) from None
     return parse_scene(data, path, os.path.dirname(os.path.abspath(path)))
 
 
@@ -308,10 +300,10 @@ EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **setting
 
 
 def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
-    """The :class:`World` of ``scene``, with only the effects the scene lists.
+    """Return the :class:`World` of ``scene``, with only the effects the scene lists.
 
-    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. Applied wrenches
-    are built only when some body takes wrench input.
+    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. The world's
+    inputs accept wrenches on the bodies that take wrench input, within the scene's limits.
     """
     def stacked(get):
         return np.array([get(body) for body in scene.bodies], dtype=float)
@@ -327,20 +319,19 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
     effects = [EFFECT_BUILDERS[kind](bodies, settings)
                for kind, settings in scene.effects.items()]
     accepts = [body.wrench_input for body in scene.bodies]
-    if any(accepts):
-        effects.append(AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts))
-    return World(bodies, initial, effects, integrator, tolerance)
+    inputs = AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts)
+    return World(bodies, initial, effects, integrator, tolerance, inputs=inputs)
 
 
 def check_world_frame(scene, world_frame):
-    """ValueError if ``world_frame`` is also a body or point frame of ``scene``.
+    """Raise ValueError if ``world_frame`` is also a body or point frame of ``scene``.
 
     A wrench's ``frame_id`` would then name both world axes and a body's, so the node
     refuses such a ``world_frame`` as the scene loader refuses such a body or point name.
     """
     for body in scene.bodies:
         if world_frame in [body.name] + [f'{body.name}/{point}' for point in body.points]:
-            raise ValueError(f'world_frame {world_frame!r} is a frame of body {body.name!r} '
+            raise ValueError(f'world_frame {shown(world_frame)} is a frame of body {body.name!r} '
                              f'in {scene.path}: a wrench frame_id would mean both')
 
 
@@ -359,4 +350,5 @@ def wrench_target(body, frame_id, world_frame):
     if prefix == body.name and point in body.points:
         return 'point', body.points[point].copy()
     valid = [world_frame, '', body.name] + [f'{body.name}/{p}' for p in body.points]
-    raise ValueError(f'unknown frame_id {frame_id!r} for body {body.name!r}; valid: {valid}')
+    raise ValueError(f'unknown frame_id {shown(frame_id)} for body {body.name!r}; valid: '
+                     f'{clipped(valid, 400)}')

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Checkers for scene fields: each takes (value, key) and returns the value or raises Mistake.
 
 A field table maps a key to (checker, default); :func:`fields` walks one, so the scene
@@ -9,9 +11,15 @@ from functools import partial
 
 import numpy as np
 
+from rigid_sim.core.text import clipped, shown
+
 # Body and point names become topic names and frame ids (~/<body>/wrench, <body>/<point>),
-# so they are REP-144 name tokens.
-NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*\Z')
+# so they are REP-144 name tokens, short enough for DDS topic names.
+NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]{0,99}\Z')
+# Every scene number is at most this in magnitude and a positive one at least its inverse:
+# the state's products (m v^2, I w^2, x x P) of such numbers stay far inside float64, where
+# 1e200 rad/s would overflow the energy. No body a robot meets comes near either bound.
+MAX_MAGNITUDE = 1e15
 # Below this norm a quaternion has no direction left to normalise to.
 MIN_QUATERNION_NORM = 1e-9
 # Field-table defaults: the key must be given / the key stays out of the result when absent.
@@ -31,16 +39,16 @@ def describe(value):
     if isinstance(value, bool) or value is None:
         return {True: 'the boolean true', False: 'the boolean false', None: 'nothing'}[value]
     if isinstance(value, str):
-        # YAML 1.1 reads an exponent without a dot (1e4) as text, like a quoted number.
-        hint = ' (write numbers unquoted, exponents with a dot: 1.0e4)'
-        return f'the text {value!r}' + (hint if re.fullmatch(r'[-+.\deE]+', value) else '')
+        hint = ' (write numbers unquoted: 1.0e4)'
+        looks_numeric = re.fullmatch(r'[-+.\deE]+', value)
+        return f'the text {shown(value)}' + (hint if looks_numeric else '')
     if isinstance(value, (list, tuple)):
         return f'a list of {len(value)}'
-    return 'a mapping' if isinstance(value, dict) else repr(value)
+    return 'a mapping' if isinstance(value, dict) else shown(value)
 
 
 def fields(value, key, spec):
-    """A mapping checked against ``spec``: name -> (checker(value, key), default).
+    """Return a mapping checked against ``spec``: name -> (checker(value, key), default).
 
     A missing key takes its default (then checked), or is refused (REQUIRED), or stays
     missing (ABSENT). An unknown key is refused with the list of valid ones.
@@ -51,7 +59,8 @@ def fields(value, key, spec):
     prefix = f'{key}.' if key else ''
     for name in value:
         if name not in spec:
-            raise Mistake(f'{prefix}{name}', f'unknown key {name!r}; valid keys: {valid}')
+            raise Mistake(f'{prefix}{clipped(name)}',
+                          f'unknown key {shown(name)}; valid keys: {valid}')
     for name, (_, default) in spec.items():
         if default is REQUIRED and name not in value:
             raise Mistake(f'{prefix}{name}', 'missing required key')
@@ -64,7 +73,7 @@ def table(spec):
 
 
 def list_of(check, what):
-    """A checker of a list whose items pass ``check``."""
+    """Return a checker of a list whose items pass ``check``."""
     def checked(value, key):
         if not isinstance(value, list):
             raise Mistake(key, f'expected a list of {what}, got {describe(value)}')
@@ -73,14 +82,41 @@ def list_of(check, what):
 
 
 def number(value, key, bound=None):
-    """A finite float; ``bound`` 'positive' or 'non-negative' adds a sign check."""
+    """Check a finite float of magnitude at most MAX_MAGNITUDE.
+
+    ``bound`` 'positive' (then at least 1 / MAX_MAGNITUDE) or 'non-negative' adds a sign
+    check.
+    """
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise Mistake(key, f'expected a number, got {describe(value)}')
-    if not math.isfinite(value):
+    if isinstance(value, float) and not math.isfinite(value):
         raise Mistake(key, f'must be finite, got {value}')
     if (bound == 'positive' and value <= 0) or (bound == 'non-negative' and value < 0):
-        raise Mistake(key, f'must be {bound}, got {value}')
+        raise Mistake(key, f'must be {bound}, got {_number_text(value)}')
+    if abs(value) > MAX_MAGNITUDE:  # an int may be too large for a float at all
+        raise Mistake(key, f'must be at most {MAX_MAGNITUDE:g} in magnitude (products of '
+                           f'such numbers in the state would overflow), got '
+                           f'{_number_text(value)}')
+    if bound == 'positive' and value < 1.0 / MAX_MAGNITUDE:
+        raise Mistake(key, f'must be at least {1.0 / MAX_MAGNITUDE:g} (its inverse scales '
+                           f'accelerations), got {_number_text(value)}')
     return float(value)
+
+
+def _number_text(value):
+    """Format a number as written: shortest exact float, an int whole unless it is huge."""
+    return repr(value) if isinstance(value, float) else shown(value)
+
+
+def count(value, key):
+    """Check a positive whole number (samples, limits); an integral float such as 1e6 is one."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise Mistake(key, f'expected a whole number, got {describe(value)}')
+    if value < 1:
+        raise Mistake(key, f'must be positive, got {_number_text(value)}')
+    return value
 
 
 def raw(value, key):
@@ -92,7 +128,7 @@ non_negative = partial(number, bound='non-negative')
 
 
 def vector(value, key, length=3, bound=None):
-    """A (length,) float array from a YAML list of finite numbers."""
+    """Check a (length,) float array from a YAML list of finite numbers."""
     if not isinstance(value, (list, tuple)) or len(value) != length:
         raise Mistake(key, f'expected a list of {length} numbers, got {describe(value)}')
     return np.array([number(item, f'{key}[{i}]', bound) for i, item in enumerate(value)])
@@ -107,7 +143,7 @@ def scale(value, key):
 
 
 def quaternion(value, key):
-    """Unit (x, y, z, w): a non-unit quaternion is normalised, a zero one refused."""
+    """Check a unit (x, y, z, w) rotation: a non-unit one is normalised, a zero one refused."""
     q = vector(value, key, 4)
     norm = np.linalg.norm(q)
     if norm < MIN_QUATERNION_NORM:
@@ -123,8 +159,9 @@ def matrix(value, key):
 
 def token(value, key):
     if not isinstance(value, str) or not NAME_TOKEN.match(value):
-        raise Mistake(key, f'expected a name of letters, digits and _ not starting with a '
-                           f'digit (it becomes a topic and frame name), got {describe(value)}')
+        raise Mistake(key, f'expected a name of at most 100 letters, digits and _ not '
+                           f'starting with a digit (it becomes a topic and frame name), got '
+                           f'{describe(value)}')
     return value
 
 
@@ -148,5 +185,5 @@ def of_type(kind, what):
 def points(value, key):
     if not isinstance(value, dict):
         raise Mistake(key, f'expected a mapping of name: [x, y, z], got {describe(value)}')
-    return {token(name, f'{key}.{name}'): vector(point, f'{key}.{name}')
+    return {token(name, f'{key}.{clipped(name)}'): vector(point, f'{key}.{name}')
             for name, point in value.items()}

@@ -15,7 +15,7 @@ import pytest
 
 @pytest.fixture
 def rigid_sim_context(monkeypatch):
-    """A fresh rclpy context, discovery off, on a domain picked from the process id."""
+    """Give a fresh rclpy context, discovery off, on a domain picked from the process id."""
     import rclpy
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
     context = rclpy.Context()
@@ -26,7 +26,7 @@ def rigid_sim_context(monkeypatch):
 
 @pytest.fixture
 def rigid_sim_executor(rigid_sim_context):
-    """A SingleThreadedExecutor on the test's context."""
+    """Give a SingleThreadedExecutor on the test's context."""
     from rclpy.executors import SingleThreadedExecutor
     executor = SingleThreadedExecutor(context=rigid_sim_context)
     yield executor
@@ -35,7 +35,7 @@ def rigid_sim_executor(rigid_sim_context):
 
 @pytest.fixture
 def rigid_sim(rigid_sim_context, rigid_sim_executor):
-    """Start simulations: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``."""
+    """Start simulations in a test: call the fixture with scene= or yaml=, and parameters."""
     from rigid_sim.testing import Simulation
     made = []
 

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Integrators behind one interface (see ``base.Integrator``), chosen by name."""
 from rigid_sim.core.integrators.adaptive import Dopri5
 from rigid_sim.core.integrators.runge_kutta import RK4, RK4World, ExplicitEuler
@@ -12,7 +14,7 @@ REGISTRY = {cls.name: cls for cls in (
 
 
 def make_integrator(name, system, tolerance=1e-6):
-    """The integrator registered as ``name``, built for ``system``.
+    """Return the integrator registered as ``name``, built for ``system``.
 
     Raises ValueError listing the valid names for an unknown one.
     """

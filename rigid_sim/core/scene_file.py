@@ -1,0 +1,193 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Reading a scene or mesh file with bounded work: size, encoding, nesting and node count.
+
+Every check here runs before the expensive step it guards: a file is measured before it is
+read, a YAML text is walked as a flat stream of events (no recursion, libyaml when present)
+before any Python object is built, and an alias counts as the whole node it repeats, so a
+"billion laughs" file is refused at its first few kilobytes. The fixed limits below guard
+the parsing that reads a scene's own ``limits:``, so a scene cannot raise them.
+"""
+import os
+import re
+import stat
+from collections.abc import Hashable
+
+import yaml
+
+from rigid_sim.core.text import clipped
+
+MIB = 1 << 20
+MAX_SCENE_BYTES = 16 * MIB  # a 100 000-body scene is about 15 MB of YAML
+MAX_DEPTH = 64              # levels of nested mappings and lists; a valid scene uses 7
+MAX_NODES = 2_000_000       # YAML nodes, an alias counting as the node it repeats
+# YAML 1.2 (core schema) floats: 1e4, -2.5E-3 and 1.0e300 are numbers, as in ROS parameter
+# files; YAML 1.1, PyYAML's default, reads an exponent without a dot as text.
+YAML12_FLOAT = re.compile(r'''^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
+                             |[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$''', re.X)
+FLOAT_TAG = 'tag:yaml.org,2002:float'
+_BASE = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)  # libyaml: ~10x faster
+
+
+class FileRefused(ValueError):
+    """A file that is not read; ``where`` is a position or ``(file)``, ``reason`` says why."""
+
+    def __init__(self, where, reason):
+        super().__init__(f'{where}: {reason}')
+        self.where, self.reason = where, reason
+
+
+def check_file(path, max_bytes, what, limit_note=''):
+    """Size in bytes of the regular file ``path`` if at most ``max_bytes``, else FileRefused.
+
+    A FIFO, device (``/dev/zero``) or directory is refused as not a regular file before it
+    is opened: reading one would block or never end. ``limit_note`` follows the size refusal
+    in parentheses (what the limit counts, how to raise it).
+    """
+    try:
+        status = os.stat(path)
+    except (OSError, ValueError) as error:  # ValueError: an embedded NUL
+        reason = getattr(error, 'strerror', None) or str(error)
+        raise FileRefused('(file)', reason) from None
+    if not stat.S_ISREG(status.st_mode):
+        raise FileRefused('(file)', f'{what} is not a regular file ({_kind(status.st_mode)})')
+    if status.st_size > max_bytes:
+        note = f' ({limit_note})' if limit_note else ''
+        raise FileRefused('(file)', f'{what} is {status.st_size} bytes, above the limit of '
+                                    f'{max_bytes} bytes{note}')
+    return status.st_size
+
+
+def _kind(mode):
+    kinds = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a FIFO'),
+             (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+             (stat.S_ISSOCK, 'a socket'))
+    return next((name for test, name in kinds if test(mode)), 'a special file')
+
+
+def read_text(path, max_bytes, what):
+    """Read the UTF-8 text of the regular file ``path``, at most ``max_bytes``, or FileRefused."""
+    check_file(path, max_bytes, what)
+    try:
+        with open(path, 'rb') as stream:
+            data = stream.read(max_bytes + 1)  # the file may have grown since the check
+    except OSError as error:
+        raise FileRefused('(file)', f'{what}: {error.strerror or error}') from None
+    if len(data) > max_bytes:
+        raise FileRefused('(file)', f'{what} is above the limit of {max_bytes} bytes')
+    try:
+        return data.decode('utf-8')
+    except UnicodeDecodeError as error:
+        raise FileRefused(f'byte {error.start}', f'{what} is not UTF-8 text '
+                                                 f'({error.reason})') from None
+
+
+class SceneLoader(_BASE):
+    """PyYAML's safe loader with YAML 1.2 floats, refusing a key given twice in one mapping.
+
+    PyYAML keeps the last of two equal keys silently; a scene that says ``mass`` twice is
+    a mistake whichever one was meant.
+    """
+
+    yaml_implicit_resolvers = {
+        first: [resolver for resolver in resolvers if resolver[0] != FLOAT_TAG]
+        for first, resolvers in _BASE.yaml_implicit_resolvers.items()}
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if not isinstance(key, Hashable):
+                continue  # the base class refuses it, saying so
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f'duplicate key {key!r}', key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+SceneLoader.add_implicit_resolver(FLOAT_TAG, YAML12_FLOAT, list('-+0123456789.'))
+
+
+def where(mark):
+    """``line L, column C`` of a YAML mark (1-based)."""
+    return f'line {mark.line + 1}, column {mark.column + 1}'
+
+
+def check_structure(text):
+    """Raise FileRefused if the YAML ``text`` nests deeper than MAX_DEPTH or exceeds MAX_NODES.
+
+    Walks the parser's events with a stack, never recursing; an alias adds the size and
+    height its anchor had. Syntax errors are left to the loader, which reports them.
+    """
+    stack = []      # per open collection: [nodes, height, anchor]
+    anchored = {}   # anchor -> (nodes, height)
+    loader = SceneLoader(text)
+    try:
+        while loader.check_event():
+            event = loader.get_event()
+            if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                _refuse_depth(len(stack) + 1, event)
+                stack.append([1, 1, event.anchor])
+            elif isinstance(event, yaml.CollectionEndEvent):
+                nodes, height, anchor = stack.pop()
+                _add(stack, anchored, anchor, nodes, height, event)
+            elif isinstance(event, yaml.ScalarEvent):
+                _add(stack, anchored, event.anchor, 1, 1, event)
+            elif isinstance(event, yaml.AliasEvent):
+                nodes, height = anchored.get(event.anchor, (1, 1))
+                _add(stack, anchored, None, nodes, height, event)
+    finally:
+        loader.dispose()
+
+
+def _add(stack, anchored, anchor, nodes, height, event):
+    """Count a finished node of ``nodes`` nodes and ``height`` levels into its parent."""
+    if anchor is not None:
+        anchored[anchor] = (nodes, height)
+    if not stack:
+        return
+    _refuse_depth(len(stack) + height, event)
+    parent = stack[-1]
+    parent[0] += nodes
+    parent[1] = max(parent[1], height + 1)
+    if parent[0] > MAX_NODES:
+        raise FileRefused(where(event.start_mark), f'more than {MAX_NODES} YAML nodes '
+                                                   '(aliases counted as what they repeat)')
+
+
+def _refuse_depth(depth, event):
+    if depth > MAX_DEPTH:
+        raise FileRefused(where(event.start_mark),
+                          f'nested deeper than {MAX_DEPTH} levels of mappings and lists')
+
+
+def load_yaml(path):
+    """Parse the YAML document of the scene file ``path``, within the limits above.
+
+    Raises
+    ------
+    FileRefused
+        Naming the position (or ``(file)``) and the reason: not a regular file, too big,
+        not UTF-8, nested too deep, too many nodes, or invalid YAML.
+    """
+    text = read_text(path, MAX_SCENE_BYTES, 'scene file')
+    try:
+        check_structure(text)
+        return yaml.load(text, Loader=SceneLoader)
+    except FileRefused:
+        raise
+    except yaml.MarkedYAMLError as error:
+        context = (f' ({error.context} from {where(error.context_mark)})'
+                   if error.context and error.context_mark else '')
+        mark = error.problem_mark or error.context_mark
+        raise FileRefused(where(mark) if mark else '(file)',
+                          f'invalid YAML: {error.problem}{context}') from None
+    except yaml.reader.ReaderError as error:
+        raise FileRefused(f'character {error.position}', f'invalid YAML: unacceptable '
+                          f'character #x{error.character:04x}: {error.reason}') from None
+    except yaml.YAMLError as error:
+        raise FileRefused('(file)', f'invalid YAML: {clipped(error)}') from None
+    except Exception as error:  # a constructor on a value it cannot hold: 5000 digits, Feb 30
+        raise FileRefused('(file)', f'invalid YAML value: {type(error).__name__}: '
+                                    f'{clipped(error)}') from None

@@ -1,0 +1,130 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Fuzzing the running node: garbage on every input topic and service, random parameters.
+
+One node takes every example of a test, over ROS from a probe node: after each, the node
+still ticks, its state is finite, and each input was either applied or refused with a short
+reason and counted. Which wrenches must be refused is worked out here from the contract
+(frames, finiteness, subnormal components, the scene's limits), not asked of the node.
+"""
+import math
+
+import numpy as np
+from hypothesis import given, strategies as st
+from rcl_interfaces.srv import SetParameters
+from rclpy.parameter import Parameter
+from std_srvs.srv import SetBool, Trigger
+
+from fuzzing import fuzz
+from rigid_sim.parameters import SPECS
+
+MAX_FORCE, MAX_TORQUE = 100.0, 10.0
+SCENE = f"""
+limits: {{max_force: {MAX_FORCE}, max_torque: {MAX_TORQUE}}}
+bodies:
+  - {{name: box, mass: 2.0, shape: {{type: box, size: [0.4, 0.2, 0.1]}},
+     points: {{thruster: [-0.2, 0.0, 0.0]}}}}
+  - {{name: rod, mass: 1.0, shape: {{type: cylinder, radius: 0.05, length: 1.0}},
+     pose: {{position: [0.0, -1.0, 0.0]}}}}
+"""
+VALID_FRAMES = {'box': ['world', '', 'box', 'box/thruster'], 'rod': ['world', '', 'rod']}
+TEXT = st.text(st.characters(blacklist_categories=('Cs',), blacklist_characters='\x00'),
+               max_size=30)
+FRAME_IDS = st.one_of(st.sampled_from(VALID_FRAMES['box'] + ['rod/thruster', 'map', '/']),
+                      TEXT, st.integers(1000, 100_000).map(lambda n: 'x' * n))
+COMPONENTS = st.one_of(st.floats(allow_subnormal=True, width=64),
+                       st.sampled_from([5e-324, -15 * 5e-324, 1e300, 1e-300, 0.0, 50.0]),
+                       st.floats(-MAX_TORQUE, MAX_TORQUE))
+VECTORS = st.lists(COMPONENTS, min_size=3, max_size=3)
+WRENCHES = st.tuples(st.just('wrench'), st.sampled_from(['box', 'rod']), FRAME_IDS, VECTORS,
+                     VECTORS)
+ACTIONS = st.lists(st.one_of(WRENCHES, st.tuples(st.just('pause'), st.booleans()),
+                             st.tuples(st.just('reset'))), min_size=1, max_size=4)
+
+
+def acceptable(body, frame_id, force, torque):
+    """Return whether the contract lets this wrench act.
+
+    It must name a frame of the body, be finite, have no subnormal component and be within
+    the scene's limits.
+    """
+    values = np.array(force + torque)
+    subnormal = np.any((values != 0.0) & (np.abs(values) < np.finfo(float).tiny))
+    return (frame_id in VALID_FRAMES[body] and bool(np.all(np.isfinite(values)))
+            and not subnormal and math.hypot(*force) <= MAX_FORCE
+            and math.hypot(*torque) <= MAX_TORQUE)
+
+
+def started(harness, write_scene):
+    """Return the one node of this test, started at its first example."""
+    if not hasattr(harness, 'sim'):
+        harness.sim = harness(write_scene(SCENE), time_step=0.125)
+    return harness.sim
+
+
+def assert_alive_and_finite(sim):
+    """Check that a tick goes through and all the node holds and publishes is finite."""
+    before = sim.sim.world.time
+    sim.tick()
+    assert np.all(np.isfinite(sim.sim.world.y)) and math.isfinite(sim.sim.world.energy())
+    assert sim.sim.world.time > before or sim.sim.paused
+    for body in ('box', 'rod'):
+        assert all(np.all(np.isfinite(part)) for part in sim.state(body)[:4])
+
+
+@fuzz(60)
+@given(actions=ACTIONS)
+def test_garbage_on_every_input_is_applied_or_refused_with_a_reason(harness, write_scene,
+                                                                    actions):
+    sim = started(harness, write_scene)
+    for action in actions:
+        if action[0] == 'wrench':
+            _, body, frame_id, force, torque = action
+            refused = dict(sim.sim.inputs.refusals.counts)
+            sim.push(body, frame_id, force, torque)
+            sim.tick()
+            now_refused = sim.sim.inputs.refusals.counts[body] - refused[body]
+            assert now_refused == (0 if acceptable(body, frame_id, force, torque) else 1), \
+                sim.sim.inputs.refusals.last
+            if now_refused:
+                reason = sim.diagnostics()['last refused input']
+                assert reason.startswith(f'~/{body}/wrench: ') and len(reason) < 1000
+        elif action[0] == 'pause':
+            response = sim.call(SetBool, 'pause', SetBool.Request(data=action[1]))
+            assert response.success and sim.sim.paused is action[1]
+        else:
+            assert sim.call(Trigger, 'reset', Trigger.Request()).success
+            assert sim.sim.world.time == 0.0
+        assert_alive_and_finite(sim)
+
+
+NAMES = st.sampled_from(sorted(SPECS) + ['use_sim_time', 'rat', 'x' * 300])
+PARAMETER_VALUES = st.one_of(
+    st.booleans(), st.integers(-2 ** 63, 2 ** 63 - 1), st.floats(width=64), TEXT,
+    st.sampled_from([0.01, 5, 1000.0, 1e-300, 10_000, 'rk4', 'dopri5', 'map', 'bad frame!',
+                     'default.yaml', '/dev/zero', '/tmp', '']))
+PARAMETER_SETS = st.lists(st.tuples(NAMES, PARAMETER_VALUES), min_size=1, max_size=3,
+                          unique_by=lambda pair: pair[0])
+
+
+@fuzz(60)
+@given(changes=PARAMETER_SETS)
+def test_random_parameter_sets_are_taken_or_refused_with_a_reason(harness, write_scene,
+                                                                  changes):
+    """Over the set_parameters service, as any client on the graph could send them."""
+    sim = started(harness, write_scene)
+    request = SetParameters.Request(parameters=[
+        Parameter(name, value=value).to_parameter_msg() for name, value in changes])
+    results = sim.call(SetParameters, 'set_parameters', request).results
+    assert len(results) == len(changes)
+    for (name, value), result in zip(changes, results):
+        if result.successful:
+            assert name in SPECS or name == 'use_sim_time'
+            if name in SPECS:
+                assert getattr(sim.sim.settings, name) == value
+        else:
+            assert result.reason and len(result.reason) < 3000
+    before = sim.sim.world.time
+    sim.sim.tick()
+    world = sim.sim.world
+    assert np.all(np.isfinite(world.y)) and (world.time > before or world.time == 0.0)

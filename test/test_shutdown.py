@@ -1,0 +1,59 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""SIGINT and SIGTERM stop a node process cleanly, whatever it is doing.
+
+Twenty node processes at every kind of tick rate (1 kHz, 100 Hz, as fast as possible, one
+tick per 1000 s) and paused, each signalled once at a different moment after it reported
+that it simulates (so mostly mid-tick at the fast rates): each must exit with status 0 and
+print no traceback and no rclpy error. The processes are forked from one that imported the
+package once (``node_forks.py``), each then running the executable's ``main`` as the console
+script does. How long each exit took after its signal is printed (``pytest -s``), not
+asserted: no timed tests.
+"""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+FORKS = Path(__file__).with_name('node_forks.py')
+START_TIMEOUT = 60.0   # s: twenty nodes discovering each other on a busy machine
+EXIT_TIMEOUT = 30.0    # s: a liveness bound, far above the exit times the benchmark shows
+RATES = (['-p', 'rate:=1000.0'], ['-p', 'rate:=100.0'], ['-p', 'rate:=0.0'],
+         ['-p', 'rate:=0.001', '-p', 'time_step:=0.01'], ['-p', 'start_paused:=true'])
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+RUNS = [(RATES[i % len(RATES)], SIGNALS[i % 2], 0.01 * (i % 7)) for i in range(20)]
+MARKS = ('Traceback', 'RCLError', 'terminate called', 'context is invalid', 'rror')
+
+
+def test_twenty_signals_each_end_a_node_with_status_zero_and_no_traceback(tmp_path):
+    namespace = f'/shutdown{os.getpid()}'
+    arguments = [['-r', f'__ns:={namespace}/n{i}', *rate] for i, (rate, _, _) in enumerate(RUNS)]
+    forks = subprocess.Popen([sys.executable, str(FORKS), str(tmp_path), json.dumps(arguments)],
+                             stdout=subprocess.PIPE, text=True)
+    signalled = []
+    try:
+        pids = json.loads(forks.stdout.readline())
+        logs = [tmp_path / f'node{i}.log' for i in range(len(RUNS))]
+        deadline = time.monotonic() + START_TIMEOUT
+        for pid, log, (rate, number, delay) in zip(pids, logs, RUNS):
+            while not (log.exists() and 'simulating' in log.read_text()):
+                assert time.monotonic() < deadline, f'{rate}: not started\n{log.read_text()}'
+                time.sleep(0.02)
+            time.sleep(delay)
+            signalled.append(time.time())
+            os.kill(pid, number)
+        forks.wait(timeout=EXIT_TIMEOUT)
+        ends = json.loads(forks.stdout.readline())
+    finally:
+        if forks.poll() is None:
+            forks.kill()
+    exits = sorted(end - start for (_, end), start in zip(ends, signalled))
+    print(f'exit after the signal: median {exits[len(exits) // 2]:.3f} s, max {exits[-1]:.3f} s')
+    for (status, _), log, (rate, number, delay) in zip(ends, logs, RUNS):
+        output = log.read_text()
+        what = f'{signal.Signals(number).name} {delay} s after start at {rate}'
+        assert status == 0, f'{what}: exit status {status}\n{output}'
+        assert not [mark for mark in MARKS if mark in output], f'{what}:\n{output}'
