@@ -18,8 +18,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from rigid_sim.core.imu_kinematics import readings
 from rigid_sim.core.imu_noise import NoisySensor, SensorNoise
 from rigid_sim.core.scene_fields import (
     ABSENT, Mistake, non_negative, number, of_type, positive, raw, table, vector, fields)
@@ -171,32 +171,11 @@ class Imus:
         """Noise-free :class:`Readings` of the IMUs ``which`` (see the module text)."""
         bodies = [self.bodies[k] for k in which]
         y = world.y[bodies]
-        q = y[:, ORIENTATION]
-        world_from_body = Rotation.from_quat(q).as_matrix()
-
-        def in_body(vectors):   # R^T v for rows v (K, 3), as v^T R
-            return np.matmul(vectors[:, None, :], world_from_body)[:, 0, :]
-
         force, torque = world.net_wrench()
-        inertia = self._inertia[which]
-        omega = _apply(self._inertia_inv[which], in_body(y[:, ANGULAR_MOMENTUM]))
-        alpha = _apply(self._inertia_inv[which],
-                       in_body(torque[bodies]) - _cross(omega, _apply(inertia, omega)))
-        lever = self._lever[which]
-        gravity = np.broadcast_to(self._gravity, (len(bodies), 3))
-        specific_force = (in_body(force[bodies] - self._mass[which][:, None] * gravity)
-                          / self._mass[which][:, None]
-                          + _cross(alpha, lever) + _cross(omega, _cross(omega, lever)))
-        return Readings(world.time, list(which), omega, specific_force, q.copy())
-
-
-def _apply(matrices, vectors):
-    """``M v`` for rows: (K, 3, 3) and (K, 3) -> (K, 3)."""
-    return np.matmul(matrices, vectors[:, :, None])[:, :, 0]
-
-
-def _cross(a, b):
-    """Row-wise ``a x b`` of (K, 3) arrays (np.cross costs ~20 us of checks per call)."""
-    return np.stack((a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
-                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]), axis=1)
+        omega, specific_force = np.empty((len(bodies), 3)), np.empty((len(bodies), 3))
+        readings(np.ascontiguousarray(y[:, ORIENTATION]),
+                 np.ascontiguousarray(y[:, ANGULAR_MOMENTUM]), force[bodies], torque[bodies],
+                 self._inertia[which], self._inertia_inv[which], self._mass[which],
+                 self._lever[which], self._gravity, omega, specific_force)
+        return Readings(world.time, list(which), omega, specific_force,
+                        y[:, ORIENTATION].copy())
