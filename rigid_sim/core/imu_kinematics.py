@@ -37,11 +37,28 @@ def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, grav
 
     Parameters
     ----------
-    q : (K, 4) orientations (x, y, z, w);  momentum : (K, 3) L, world, kg m^2/s
-    force, torque : (K, 3) net force, N, and torque about the centre of mass, N m, world
-    inertia, inertia_inv : (K, 3, 3) body-axes inertia about the centre of mass and inverse
-    mass : (K,) kg;  lever : (K, 3) m, mount point minus centre of mass, body axes
-    gravity : (3,) m/s^2, world
+    q : (K, 4) float
+        Orientations (x, y, z, w), body to world.
+    momentum : (K, 3) float
+        Angular momentum L, world, kg m^2/s.
+    force : (K, 3) float
+        Net force, world, N.
+    torque : (K, 3) float
+        Net torque about the centre of mass, world, N m.
+    inertia : (K, 3, 3) float
+        Inertia about the centre of mass, body axes, kg m^2.
+    inertia_inv : (K, 3, 3) float
+        Its inverse.
+    mass : (K,) float
+        kg.
+    lever : (K, 3) float
+        Mount point minus centre of mass, body axes, m.
+    gravity : (3,) float
+        Gravitational acceleration, world, m/s^2.
+    omega : (K, 3) float
+        Output: angular velocity, body axes, rad/s.
+    specific_force : (K, 3) float
+        Output: specific force at the mount point, body axes, m/s^2.
     """
     for k in range(q.shape[0]):
         turn = _matrix(q[k])
