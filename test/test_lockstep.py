@@ -6,6 +6,7 @@ One box in free flight, x = x0 + v0 t, stepped by 1/64 s (exact in binary, so si
 times add up exactly and every expected value below is exact).
 """
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticStatus
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_sim import conversions
@@ -95,3 +96,6 @@ def test_rate_zero_ticks_without_a_wall_clock_and_stands_still_while_paused(
     pose = sim.latest('box/pose')
     np.testing.assert_allclose(conversions.pose_arrays(pose.pose)[0],
                                X0 + V0 * (paused_at + STEP), rtol=0, atol=1e-12)
+    values = sim.diagnostics()   # no wall rate: no real-time factor to aim at, no WARN
+    assert values['real-time factor target'].startswith('none')
+    assert sim.latest('/diagnostics').status[0].level == DiagnosticStatus.OK

@@ -127,3 +127,18 @@ def test_node_reports_given_up_ticks_on_diagnostics(harness, write_scene, clock)
     assert int(values['ticks dropped behind wall time']) >= 1900
     status = sim.latest('/diagnostics').status[0]
     assert status.level == DiagnosticStatus.WARN and 'fell behind' in status.message
+
+
+def test_rate_changes_switch_between_the_wall_schedule_and_as_fast_as_possible(clock):
+    """Rate 50 -> 0 -> 50 at runtime: a zero period, then 20 ms again on a fresh schedule."""
+    loop, wake, ticks = make_loop(rate=50.0)
+    loop.set_rate(0.0)
+    assert loop.timer.timer_period_ns == 0
+    wake()
+    assert len(ticks) >= 1
+    loop.set_rate(50.0)
+    assert loop.timer.timer_period_ns == 20_000_000
+    before = len(ticks)
+    clock.now += 0.02
+    wake()
+    assert len(ticks) == before + 1
