@@ -1,7 +1,8 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""scipy's elliptic functions inside compiled code: ``ellipj``, ``ellipkm1``, ``elliprf``,
-``elliprj`` of ``scipy.special.cython_special``.
+"""scipy's elliptic functions inside compiled code.
+
+``ellipj``, ``ellipkm1``, ``elliprf`` and ``elliprj`` of ``scipy.special.cython_special``.
 
 Each C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
@@ -41,6 +42,7 @@ def _four_doubles(typingctx):
     signature = types.UniTuple(_DOUBLE_POINTER, 4)()
 
     def codegen(context, builder, sig, args):
+        """Allocate the four doubles in the caller's stack frame."""
         double = context.get_value_type(types.double)
         pointers = [cgutils.alloca_once(builder, double) for _ in range(4)]
         return context.make_tuple(builder, sig.return_type, pointers)
@@ -51,6 +53,7 @@ def _four_doubles(typingctx):
 def _load(typingctx, pointer):
     """The double ``pointer`` points to."""
     def codegen(context, builder, sig, args):
+        """Load through the pointer."""
         return builder.load(args[0])
     return types.double(pointer), codegen
 
