@@ -71,9 +71,10 @@ class RigidSimNode(Node):
         self.ticks = 0
         self._pending = None       # validated parameter change awaiting the post-set callback
         self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
-        self.outputs = StateOutputs(self, self.scene, self.settings.world_frame)
+        self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
+                                    self.settings.per_body_topics_limit)
         self.imu_outputs = ImuOutputs(self, self.scene, self.world, '')
-        self.inputs = BodyInputs(self, self.scene)
+        self.inputs = BodyInputs(self, self.scene, self.settings.per_body_topics_limit)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
         self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
                                   step=self.step, now=lambda: self.world.time,
@@ -230,6 +231,8 @@ class RigidSimNode(Node):
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""
+        self.outputs.per_body_limit = self.inputs.per_body_limit = \
+            self.settings.per_body_topics_limit
         self.outputs.wire(self.scene, self.settings.world_frame)
         self.imu_outputs.wire(self.scene, self.world, '')
         self.inputs.wire(self.scene)
