@@ -13,6 +13,7 @@ import yaml
 from rigid_sim.bench import cli
 from rigid_sim.bench.node_rate import QUICK, SECTION, Config, goals, scene_text
 from rigid_sim.core.scene import parse_scene
+from rigid_sim.tick_loop import MAX_LAG
 
 
 def table_rows(text):
@@ -54,8 +55,12 @@ def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
     assert len(results) == len(QUICK['configs'])
     for result in results:
         config = result['config']
-        assert 0.5 < result['real_time_factor'] < 1.1 and math.isfinite(result['tick_mean'])
-        assert 0.5 * result['expected_ticks'] < result['ticks'] <= result['expected_ticks'] + 2
+        # Ticks owed when the window opens (at most MAX_LAG behind) are caught up inside it.
+        owed = config.rate * MAX_LAG
+        assert 0.5 < result['real_time_factor'] < 1.1 + MAX_LAG / QUICK['duration']
+        assert math.isfinite(result['tick_mean'])
+        assert (0.5 * result['expected_ticks'] < result['ticks']
+                <= result['expected_ticks'] + 2 + owed)
         assert 0.0 < result['tick_mean'] <= result['tick_p99']
         assert result['topics'] == (2 * config.bodies if config.listened == 'bodies' else 1)
         assert result['topics_heard'] == result['topics']

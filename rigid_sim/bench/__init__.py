@@ -3,9 +3,10 @@
 """Benchmarks behind the ``rigid_sim_bench`` console script, and what they share.
 
 Subcommands: ``accuracy`` (:mod:`.accuracy`), ``inertia`` (:mod:`.inertia_cost`),
-``stability`` (:mod:`.stability`), ``throughput`` (:mod:`.throughput`) and ``node``
-(:mod:`.node_rate`). CPU time is ``time.process_time`` (this process's user + system time), so
-other load on the machine does not count against a method.
+``stability`` (:mod:`.stability`), ``throughput`` (:mod:`.throughput`), ``node``
+(:mod:`.node_rate`) and ``imu`` (:mod:`.imu_cost`). CPU time is ``time.process_time``
+(this process's user + system time), so other load on the machine does not count against a
+method.
 """
 import datetime
 import os

@@ -302,7 +302,8 @@ def report(results, seconds, starts=()):
         'fills and sends only outputs with subscribers.',
         '- Tick: applying inputs, integrating and publishing (`time.perf_counter` around '
         '`tick()`). Busy: the share of wall time spent in ticks. Real-time factor: simulated '
-        'time advanced over wall time; the 1 kHz timer drops a period it overran.',
+        'time advanced over wall time; the tick loop catches late ticks up and gives up '
+        'those more than 0.1 s behind (`rigid_sim/tick_loop.py`).',
         '- Waitables: entities of the node (such as the QoS event handlers rclpy gives every '
         'publisher) that the executor adds to its wait set on every `spin_once`, in Python.',
         '', '### Real-time factor and tick time', table(results),
