@@ -11,6 +11,13 @@ ROS_WHEELS = ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-f
 BENCH = ['mujoco', 'matplotlib', 'tqdm']
 
 
+def share_files(folder, pattern):
+    """``folder``'s files ending in ``pattern``, installed to ``share/rigid_sim/folder``."""
+    return (os.path.join('share', PACKAGE, folder),
+            sorted(os.path.join(folder, name) for name in os.listdir(folder)
+                   if name.endswith(pattern)))
+
+
 def config_files():
     """``config/`` installed as ``share/rigid_sim/config/``, keeping its folders."""
     installed = []
@@ -28,10 +35,12 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
         ('share/' + PACKAGE, ['package.xml']),
+        share_files('launch', '.launch.py'),
+        share_files('rviz', '.rviz'),
     ] + config_files(),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
-    install_requires=['setuptools', 'numpy', 'scipy', 'PyYAML', 'trimesh', 'rtree'],
+    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
@@ -52,5 +61,7 @@ setup(
             'rigid_sim_node = rigid_sim.main:executable',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
         ],
+        # The test kit's fixtures for users' pytest suites (rigid_sim.testing).
+        'pytest11': ['rigid_sim = rigid_sim.testing.plugin'],
     },
 )

@@ -11,7 +11,7 @@ Quaternions are (x, y, z, w) in ROS messages and in the core alike.
 import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TwistStamped
+from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
@@ -76,6 +76,12 @@ def clock(seconds):
 class StateMessages:
     """The per-tick outputs of N bodies, refilled in place from a Snapshot.
 
+    Parameters
+    ----------
+    bodies : sequence of N scene BodySpec
+    world_frame : str, frame_id of every pose
+    frame_prefix : str, prefixed to the body frames (odometry child, transforms)
+
     Attributes
     ----------
     poses, twists, odometry : list of N PoseStamped, TwistStamped, Odometry
@@ -84,20 +90,25 @@ class StateMessages:
         The same N Pose objects.
     markers : MarkerArray
         One marker per body, sharing the same Pose objects.
+    transforms : list of N TransformStamped
+        World_frame -> body frame, filled by :meth:`fill_transforms`.
     """
 
-    def __init__(self, bodies, world_frame):
+    def __init__(self, bodies, world_frame, frame_prefix=''):
         self.stamp = Time()
         shared_poses = [Pose() for _ in bodies]
         self.poses = [PoseStamped(pose=pose) for pose in shared_poses]
         self.twists = [TwistStamped() for _ in bodies]
-        self.odometry = [Odometry(child_frame_id=body.name) for body in bodies]
+        self.odometry = [Odometry(child_frame_id=frame_prefix + body.name) for body in bodies]
         self.pose_array = PoseArray(poses=shared_poses)
         self.markers = MarkerArray(markers=[marker(i, body, pose)
                                             for i, (body, pose) in enumerate(zip(bodies,
                                                                                  shared_poses))])
+        self.transforms = [TransformStamped(child_frame_id=frame_prefix + body.name)
+                           for body in bodies]
         headers = ([m.header for m in self.poses + self.twists + self.odometry]
-                   + [self.pose_array.header] + [m.header for m in self.markers.markers])
+                   + [self.pose_array.header] + [m.header for m in self.markers.markers]
+                   + [t.header for t in self.transforms])
         for header in headers:
             header.frame_id = world_frame
             header.stamp = self.stamp
@@ -125,6 +136,53 @@ class StateMessages:
             row = rows[index]
             _set_twist(self.twists[index].twist, row[7:13])
             _set_twist(self.odometry[index].twist.twist, row[13:19])
+
+    def fill_transforms(self):
+        """Copy every body's current Pose (as filled last) into its TransformStamped."""
+        for transform, pose in zip(self.transforms, self.pose_array.poses):
+            copy_pose_to_transform(pose, transform.transform)
+
+
+def copy_pose_to_transform(pose, transform):
+    """Write a geometry_msgs/Pose into a geometry_msgs/Transform (the same rigid motion)."""
+    p, t = pose.position, transform.translation
+    t.x, t.y, t.z = p.x, p.y, p.z
+    q, r = pose.orientation, transform.rotation
+    r.x, r.y, r.z, r.w = q.x, q.y, q.z, q.w
+
+
+def static_transforms(bodies, frame_prefix, seconds):
+    """TransformStamped from each body frame to its named points and its IMU frame.
+
+    Parameters
+    ----------
+    bodies : sequence of scene BodySpec (``points``: name -> (3,) m, body frame; ``imu``)
+    frame_prefix : str, prefixed to every frame
+    seconds : float, simulated time of the stamp
+
+    Returns
+    -------
+    list of TransformStamped, parent ``<prefix><body>``, child ``<prefix><body>/<point>``
+    (``<prefix><body>/imu`` for an IMU placed by coordinates), identity rotation.
+    """
+    transforms = []
+    for body in bodies:
+        points = dict(body.points)
+        if body.imu is not None:
+            points.setdefault(body.imu.frame, body.imu.point)
+        for name, point in points.items():
+            transform = TransformStamped(child_frame_id=f'{frame_prefix}{body.name}/{name}')
+            transform.header.frame_id = frame_prefix + body.name
+            to_time(seconds, transform.header.stamp)
+            t = transform.transform.translation
+            t.x, t.y, t.z = (float(v) for v in point)
+            transforms.append(transform)
+    return transforms
+
+
+def delete_all_markers():
+    """A MarkerArray that clears every marker of this publisher in RViz."""
+    return MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
 
 
 def _set_pose(pose, values):

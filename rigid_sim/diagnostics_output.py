@@ -16,8 +16,9 @@ class DiagnosticsOutput:
 
     Parameters
     ----------
-    node : rclpy.node.Node
-        Owns the publisher; its name is the status name.
+    node : rigid_sim.node.RigidSimNode
+        Owns the publisher (created through its ``qos_overrides``); its name is the status
+        name.
     publish : callable
         Called without arguments once per ``PERIOD``: the node's report, which calls
         :meth:`publish`.
@@ -26,7 +27,8 @@ class DiagnosticsOutput:
 
     def __init__(self, node, publish, sim_time):
         self._node = node
-        self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', QUEUE_DEPTH)
+        self._publisher = node.qos_overrides.create_publisher(DiagnosticArray, '/diagnostics',
+                                                              QUEUE_DEPTH)
         self.stats = TickStats(sim_time)
         node.create_timer(PERIOD, publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
 

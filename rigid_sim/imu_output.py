@@ -19,8 +19,8 @@ class ImuOutputs:
 
     Parameters
     ----------
-    node : rclpy.node.Node
-        Creates and destroys the publishers.
+    node : rigid_sim.node.RigidSimNode
+        Creates (through its ``qos_overrides``) and destroys the publishers.
     scene : rigid_sim.core.scene.Scene
     world : rigid_sim.core.world.World of that scene
     frame_prefix : str, prefixed to the IMU frames
@@ -30,6 +30,7 @@ class ImuOutputs:
         self._node = node
         self.imus = None          # rigid_sim.core.imu.Imus, None when the scene has none
         self._publishers = []     # per IMU
+        self._names = []          # per IMU, the name of its body
         self._messages = []       # per IMU, refilled at each reading
         self.wire(scene, world, frame_prefix)
 
@@ -42,11 +43,17 @@ class ImuOutputs:
         if self.imus is None:
             self._publishers, self._messages = [], []
             return
-        names = [scene.bodies[index].name for index in self.imus.bodies]
-        self._publishers = [self._node.create_publisher(Imu, f'~/{name}/imu', QUEUE_DEPTH)
-                            for name in names]
-        self._messages = [conversions.imu_message(f'{frame_prefix}{name}/{spec.frame}', spec)
-                          for name, spec in zip(names, self.imus.specs)]
+        self._names = [scene.bodies[index].name for index in self.imus.bodies]
+        create = self._node.qos_overrides.create_publisher
+        self._publishers = [create(Imu, f'~/{name}/imu', QUEUE_DEPTH) for name in self._names]
+        self.set_frame_prefix(frame_prefix)
+
+    def set_frame_prefix(self, frame_prefix):
+        """Rebuild the reused messages with IMU frames ``<prefix><body>/<frame>``."""
+        if self.imus is not None:
+            self._messages = [conversions.imu_message(f'{frame_prefix}{name}/{spec.frame}',
+                                                      spec)
+                              for name, spec in zip(self._names, self.imus.specs)]
 
     def restart(self):
         """Every IMU due again and its noise drawn anew from its seed (time went back to 0)."""

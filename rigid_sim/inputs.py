@@ -25,7 +25,6 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.core.body_state import with_pose, with_twist
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.scene import wrench_target
 
 QUEUE_DEPTH = 10
@@ -38,7 +37,7 @@ MAX_PENDING = 1000   # distinct (body, topic, frame_id) waiting for one tick
 
 def held_wrenches(world):
     """Return the world's held wrenches (``hold``, ``release``, ``check``): the only way in."""
-    return world.effect(AppliedWrenches)
+    return world.inputs
 
 
 class Refusals:
@@ -154,6 +153,11 @@ class BodyInputs:
             self._subscriptions.append(self._subscribe(kinds[topic], topic, index,
                                                        self._names[index]))
 
+    def topics(self):
+        """Fully qualified names of every input topic, subscribed to or awaited."""
+        return {subscription.topic_name for subscription in self._subscriptions} | set(
+            self._awaited)
+
     @property
     def pending(self):
         """Return the number of messages received since the last tick (superseded too)."""
@@ -186,7 +190,12 @@ class BodyInputs:
 
     @staticmethod
     def _hold(world, body, index, message, settings):
-        frame, point = wrench_target(body, message.header.frame_id, settings.world_frame)
+        frame_id = message.header.frame_id
+        prefix = settings.frame_prefix
+        # The body and point frames carry the prefix in tf; a wrench may name them so.
+        if prefix and frame_id != settings.world_frame and frame_id.startswith(prefix):
+            frame_id = frame_id[len(prefix):]
+        frame, point = wrench_target(body, frame_id, settings.world_frame)
         force, torque = conversions.wrench_arrays(message)
         timeout = settings.wrench_timeout
         expires = world.time + timeout if timeout > 0.0 else math.inf

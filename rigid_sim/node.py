@@ -23,6 +23,7 @@ from rigid_sim.diagnostics_output import DiagnosticsOutput
 from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, QUEUE_DEPTH, StateOutputs
+from rigid_sim.qos_overrides import QosOverrides
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
 
@@ -70,10 +71,13 @@ class RigidSimNode(Node):
         self.scene, self.world = load(self.settings)
         self.ticks = 0
         self._pending = None       # validated parameter change awaiting the post-set callback
-        self._clock_publisher = self.create_publisher(ClockMessage, '/clock', QUEUE_DEPTH)
+        self.qos_overrides = QosOverrides(self)
+        self._clock_publisher = self.qos_overrides.create_publisher(ClockMessage, '/clock',
+                                                                    QUEUE_DEPTH)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
+                                    self.settings.frame_prefix,
                                     self.settings.per_body_topics_limit)
-        self.imu_outputs = ImuOutputs(self, self.scene, self.world, '')
+        self.imu_outputs = ImuOutputs(self, self.scene, self.world, self.settings.frame_prefix)
         self.inputs = BodyInputs(self, self.scene, self.settings.per_body_topics_limit)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
         self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
@@ -81,6 +85,7 @@ class RigidSimNode(Node):
                                   paused_changed=self.loop.set_paused)
         self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
+        self.qos_overrides.finish_start()
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self.get_logger().info(self._describe())
@@ -221,8 +226,10 @@ class RigidSimNode(Node):
         else:
             if prepared is not None:
                 self.world.integrator = prepared
-            if proposed.world_frame != previous.world_frame:
-                self.outputs.set_frame(self.scene, proposed.world_frame)
+            frames = (proposed.world_frame, proposed.frame_prefix)
+            if frames != (previous.world_frame, previous.frame_prefix):
+                self.outputs.set_frame(self.scene, *frames)
+                self.imu_outputs.set_frame_prefix(proposed.frame_prefix)
         if proposed.rate != previous.rate:
             self.loop.set_rate(proposed.rate)
         self.get_logger().info(self._describe())
@@ -233,7 +240,7 @@ class RigidSimNode(Node):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""
         self.outputs.per_body_limit = self.inputs.per_body_limit = \
             self.settings.per_body_topics_limit
-        self.outputs.wire(self.scene, self.settings.world_frame)
-        self.imu_outputs.wire(self.scene, self.world, '')
+        self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
+        self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
         self.inputs.wire(self.scene)
         self.health.restart(self.world.time)

@@ -18,6 +18,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from visualization_msgs.msg import MarkerArray
 
 from rigid_sim import conversions
+from rigid_sim.tf_output import TfOutput
 
 # A new subscriber waits at most this long (s of wall time) on top of discovery, which
 # takes longer than this between processes anyway.
@@ -31,36 +32,48 @@ BODY_TOPICS = ((PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom'
 
 
 class StateOutputs:
-    """Pose, twist and odometry per body, the PoseArray and the markers of one scene.
+    """Pose, twist and odometry per body, the PoseArray, the markers and tf of one scene.
 
     Parameters
     ----------
-    node : rclpy.node.Node
-        Creates and destroys the publishers.
+    node : rigid_sim.node.RigidSimNode
+        Creates (through its ``qos_overrides``) and destroys the publishers.
     scene : rigid_sim.core.scene.Scene
     world_frame : str
         frame_id of every published pose.
+    frame_prefix : str
+        Prefixed to every body and point frame.
     per_body_limit : int
         Up to this many bodies, every per-body publisher is made at once.
     """
 
-    def __init__(self, node, scene, world_frame, per_body_limit):
+    def __init__(self, node, scene, world_frame, frame_prefix, per_body_limit):
         self._node = node
         self.per_body_limit = per_body_limit
         self._awaited = {}           # resolved topic name -> (body index, slot), not made
-        self._pose_array = node.create_publisher(PoseArray, '~/poses', QUEUE_DEPTH)
-        self._markers = node.create_publisher(MarkerArray, '~/markers', QUEUE_DEPTH)
+        self._pose_array = node.qos_overrides.create_publisher(PoseArray, '~/poses',
+                                                               QUEUE_DEPTH)
+        self._markers = node.qos_overrides.create_publisher(MarkerArray, '~/markers',
+                                                            QUEUE_DEPTH)
+        self._tf = TfOutput(node)
         self._bodies = []            # per body: its publishers, in BODY_TOPICS order
         self._messages = None        # conversions.StateMessages of the scene
+        self._tf_message = None      # TFMessage of the messages' transforms (None: no tf)
         self._listened = []          # per body: a bool per publisher
         self._listened_bodies = []   # indices of bodies with any subscriber
         self._moving_bodies = []     # indices of bodies whose twist or odometry is heard
-        self._aggregates = []        # PoseArray and marker publishers with subscribers
+        self._aggregates = []        # (publisher, message) of heard all-body outputs
+        self._tf_heard = False       # /tf has subscribers
         self._listeners_due = -math.inf
-        self.wire(scene, world_frame)
+        self.wire(scene, world_frame, frame_prefix)
 
-    def wire(self, scene, world_frame):
-        """Replace the per-body publishers and messages by those of ``scene``."""
+    def wire(self, scene, world_frame, frame_prefix):
+        """Replace the per-body publishers and messages by those of ``scene``.
+
+        The markers of a previous scene are cleared in RViz (DELETEALL) first.
+        """
+        if self._messages is not None:
+            self._markers.publish(conversions.delete_all_markers())
         for publishers in self._bodies:
             for publisher in publishers:
                 if publisher is not None:
@@ -74,12 +87,11 @@ class StateOutputs:
             self._bodies = [[None] * len(BODY_TOPICS) for _ in scene.bodies]
             self._awaited = {self._node.resolve_topic_name(name): (index, slot)
                              for index, row in enumerate(names) for slot, name in enumerate(row)}
-        self.set_frame(scene, world_frame)
-        self._listeners_due = -math.inf
+        self.set_frame(scene, world_frame, frame_prefix)
 
     def _made(self, slot, name):
-        return self._node.create_publisher(BODY_TOPICS[slot][0], name, QUEUE_DEPTH,
-                                           event_callbacks=NO_EVENTS)
+        return self._node.qos_overrides.create_publisher(BODY_TOPICS[slot][0], name,
+                                                         QUEUE_DEPTH, event_callbacks=NO_EVENTS)
 
     def _make_on_demand(self):
         """Make the awaited per-body publishers whose topic has appeared in the graph."""
@@ -88,9 +100,17 @@ class StateOutputs:
             index, slot = self._awaited.pop(name)
             self._bodies[index][slot] = self._made(slot, name)
 
-    def set_frame(self, scene, world_frame):
-        """Rebuild the reused messages of ``scene`` for a new ``world_frame``."""
-        self._messages = conversions.StateMessages(scene.bodies, world_frame)
+    def set_frame(self, scene, world_frame, frame_prefix):
+        """Rebuild the reused messages of ``scene`` for new frame names; resend tf_static."""
+        self._messages = conversions.StateMessages(scene.bodies, world_frame, frame_prefix)
+        self._tf_message = self._tf.message(self._messages.transforms)
+        self._tf.publish_static(conversions.static_transforms(scene.bodies, frame_prefix, 0.0))
+        self._listeners_due = -math.inf
+
+    @property
+    def tf_available(self):
+        """Whether /tf and /tf_static are published (tf2_msgs is installed)."""
+        return self._tf.available
 
     def refresh_listeners(self):
         """Ask who listens at the next publication (lockstep clients want every tick)."""
@@ -109,15 +129,16 @@ class StateOutputs:
         posed = range(len(self._bodies)) if self._aggregates else listened
         messages = self._messages
         messages.fill(world.snapshot(), posed, self._moving_bodies)
+        if self._tf_heard:
+            messages.fill_transforms()
         for index in listened:
             sent = (messages.poses[index], messages.twists[index], messages.odometry[index])
             for publisher, wanted, message in zip(self._bodies[index], self._listened[index],
                                                   sent):
                 if wanted:
                     publisher.publish(message)
-        for publisher in self._aggregates:
-            publisher.publish(messages.pose_array if publisher is self._pose_array
-                              else messages.markers)
+        for publisher, message in self._aggregates:
+            publisher.publish(message)
 
     def _find_listeners(self):
         """Which outputs have subscribers: per body (pose, twist, odometry) and aggregates."""
@@ -129,5 +150,10 @@ class StateOutputs:
                                  if any(wanted)]
         self._moving_bodies = [index for index, (_, twist, odometry) in enumerate(self._listened)
                                if twist or odometry]
-        self._aggregates = [publisher for publisher in (self._pose_array, self._markers)
+        messages = self._messages
+        aggregates = [(self._pose_array, messages.pose_array), (self._markers, messages.markers)]
+        if self._tf.available:
+            aggregates.append((self._tf.dynamic, self._tf_message))
+        self._aggregates = [(publisher, message) for publisher, message in aggregates
                             if publisher.get_subscription_count() > 0]
+        self._tf_heard = any(publisher is self._tf.dynamic for publisher, _ in self._aggregates)

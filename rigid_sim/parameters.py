@@ -62,6 +62,7 @@ class Settings:
     publish_clock: bool    # publish /clock
     start_paused: bool     # integration paused at start
     step_ticks: int        # ticks one ~/step call advances
+    frame_prefix: str      # prefixed to every body and point frame
     per_body_topics_limit: int  # up to this many bodies, every per-body topic exists at start
 
     @property
@@ -88,6 +89,10 @@ class Spec:
     description: str
     low: float = None  # inclusive bounds of a numeric parameter
     high: float = None
+    # A text parameter must match this regular expression in full (None: any non-empty
+    # text); pattern_meaning says in words what it matches.
+    pattern: str = None
+    pattern_meaning: str = ''
 
 
 SPECS = {
@@ -114,6 +119,11 @@ SPECS = {
     'publish_clock': Spec(bool, 'publish /clock so other nodes can run on simulated time'),
     'start_paused': Spec(bool, 'start with integration paused (read at start only)'),
     'step_ticks': Spec(int, 'ticks that one ~/step call advances', 1, MAX_STEP_TICKS),
+    'frame_prefix': Spec(str, 'prefixed to every body and point frame in messages and tf '
+                              '(e.g. sim1/), for several simulators on one graph',
+                         pattern=r'(?!/)(?!.*//)[A-Za-z0-9_/]*',
+                         pattern_meaning='letters, digits, _ and /, not starting with / and '
+                                         'without //'),
     'per_body_topics_limit': Spec(int, 'a scene of at most this many bodies has every '
                                        "body's pose, twist, odom and wrench topic from the "
                                        'start; in a larger one each is made once a '
@@ -151,7 +161,11 @@ def coerce(name, value):
             f'parameter {name!r}: expected a {spec.kind.__name__}, got {shown(value)}')
     if spec.low is not None:
         _check_range(name, spec, value)
-    if spec.kind is str:
+    if spec.pattern is not None:
+        if len(value) > MAX_FRAME_NAME or not re.fullmatch(spec.pattern, value):
+            raise ParameterError(f'parameter {name!r}: expected {spec.pattern_meaning}, at '
+                                 f'most {MAX_FRAME_NAME} characters, got {shown(value)}')
+    elif spec.kind is str:
         _check_text(name, value)
     return spec.kind(value)
 
@@ -161,7 +175,8 @@ def _check_range(name, spec, value):
         raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
                              f'[{spec.low:g}, {spec.high:g}]')
     if name == 'rate' and 0.0 < value < MIN_RATE:
-        raise ParameterError(f'parameter {name!r}: {value!r} is neither 0 (no wall clock) nor '
+        raise ParameterError(f'parameter {name!r}: {value!r} outside the range '
+                             f'[{MIN_RATE:g}, {spec.high:g}]: neither 0 (no wall clock) nor '
                              f'at least {MIN_RATE:g} Hz')
 
 
@@ -202,7 +217,8 @@ def declare(node):
     defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
-                'step_ticks': 1, 'per_body_topics_limit': PER_BODY_TOPICS_LIMIT}
+                'step_ticks': 1, 'frame_prefix': '',
+                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)

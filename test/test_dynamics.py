@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 import physics_cases as cases
 from physics_cases import TILT
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
@@ -18,9 +18,10 @@ ROUNDING = 1e-11                         # relative error left by float64 sums o
 ASYMMETRIC_INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
 
 
-def with_effects(bodies, effects, integrator, tolerance=1e-6, velocity=(0.5, 0.0, 1.0)):
+def with_effects(bodies, effects, integrator, tolerance=1e-6, velocity=(0.5, 0.0, 1.0),
+                 inputs=None):
     return cases.make_world(bodies, (0.2, -0.1, 1.0), TILT.as_quat(), velocity,
-                            (3.0, -2.0, 4.0), effects, integrator, tolerance)
+                            (3.0, -2.0, 4.0), effects, integrator, tolerance, inputs=inputs)
 
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
@@ -71,7 +72,7 @@ def pushed_at_point(integrator, tolerance=1e-6):
     bodies = cases.make_bodies(1.5, ASYMMETRIC_INERTIA, (0.1, -0.05, 0.02))
     wrenches = AppliedWrenches(bodies)
     wrenches.hold(0, 'thruster', 'world_point', OFFSET_FORCE, point=FORCE_POINT)
-    return with_effects(bodies, [wrenches], integrator, tolerance)
+    return with_effects(bodies, [], integrator, tolerance, inputs=wrenches)
 
 
 def point_force_invariant(world):

@@ -12,9 +12,10 @@ from scipy.spatial.transform import Rotation
 import physics_cases as cases
 from physics_cases import TILT
 import rigid_sim.core.effects
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches, WrenchInputs
+from rigid_sim.core.effects.base import Effect
 from rigid_sim.core.effects.damping import Damping
-from rigid_sim.core.effects.gravity import Gravity
+from rigid_sim.core.effects.gravity import Gravity, GravityParameters
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
@@ -147,7 +148,7 @@ def pushed(max_force=10.0, max_torque=5.0, accepts=None, integrator='rk4'):
     bodies = cases.make_bodies([1.5, 0.5], [INERTIA, INERTIA], [COM, COM])
     wrenches = AppliedWrenches(bodies, max_force, max_torque, accepts)
     world = cases.make_world(bodies, np.zeros((2, 3)), [TILT.as_quat()] * 2, np.zeros((2, 3)),
-                             np.zeros((2, 3)), [wrenches], integrator)
+                             np.zeros((2, 3)), [], integrator, inputs=wrenches)
     return world, wrenches
 
 
@@ -280,38 +281,40 @@ def test_refused_wrench_changes_nothing(body, frame, force, torque):
 
 
 def effect_classes():
-    """Every effect class the core ships: classes with ``accumulate`` in rigid_sim.core.effects."""
+    """Every effect class the core ships: the subclasses of Effect in rigid_sim.core.effects."""
     found = set()
     for module in pkgutil.iter_modules(rigid_sim.core.effects.__path__):
         imported = importlib.import_module(f'rigid_sim.core.effects.{module.name}')
         found.update(cls for _, cls in inspect.getmembers(imported, inspect.isclass)
-                     if hasattr(cls, 'accumulate'))
+                     if issubclass(cls, Effect) and cls is not Effect)
     return found
 
 
 @pytest.mark.parametrize('name', sorted(REGISTRY))
 def test_unlisted_effects_cost_nothing(name, monkeypatch):
-    """A world runs only the effects it lists.
+    """A world compiles and runs only the effects it lists.
 
-    With none, no effect code runs while stepping (every effect's methods are made to raise), the
-    net wrench is zero and no body is torqued; with gravity alone, gravity is the only effect
-    evaluated, once per wrench evaluation.
+    With none, no effect's parameters or energy are read while it steps (every effect's are
+    made to raise), its wrench sum gets the inputs alone, the net wrench is zero and no body is
+    torqued; with gravity alone, gravity's parameters are the only effect's its kernel is given.
     """
     def refuse(*args):
         raise AssertionError('an unlisted effect was evaluated')
 
-    assert {AppliedWrenches, Damping, Gravity, Springs} <= effect_classes()
-    calls = []
+    assert {Damping, Gravity, Springs} <= effect_classes()
     for cls in effect_classes():
-        monkeypatch.setattr(cls, 'accumulate', refuse)
+        monkeypatch.setattr(cls, 'parameters', property(refuse))
         monkeypatch.setattr(cls, 'potential_energy', refuse)
     bare = tumbling(integrator=name)
     assert bare.effects == [] and not bare.torqued.any()
+    assert [type(p) for p in bare.effect_parameters()] == [WrenchInputs]
     cases.advance(bare, 0.05, 0.2)
     bare.energy()
     assert not np.any(bare.wrench(bare.snapshot()))
-    monkeypatch.setattr(Gravity, 'accumulate', lambda self, *args: calls.append(self))
+    monkeypatch.undo()
     only_gravity = tumbling(lambda bodies: [Gravity(bodies, GRAVITY)], integrator=name)
     cases.advance(only_gravity, 0.05, 0.2)
     assert [type(effect) for effect in only_gravity.effects] == [Gravity]
-    assert len(calls) == only_gravity.integrator.evaluations > 0
+    assert [type(p) for p in only_gravity.effect_parameters()] == [GravityParameters,
+                                                                   WrenchInputs]
+    assert only_gravity.integrator.evaluations > 0

@@ -10,7 +10,7 @@ at the end of the last step; a wrench held since then must still be seen.
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
@@ -58,7 +58,7 @@ def test_guard_sees_a_wrench_held_between_steps():
     y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
                       [[0.0, 0.0, 20.0]])   # |omega| dt = 0.2, four times the bound
     wrenches = AppliedWrenches(bodies)
-    world = World(bodies, y, [wrenches], 'exact_split')
+    world = World(bodies, y, [], 'exact_split', inputs=wrenches)
     dt = 0.01
     world.step(dt)
     assert world.diagnostics.substeps == 1

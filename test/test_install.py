@@ -63,6 +63,8 @@ def test_colcon_install_has_ament_layout_and_its_executable_starts(tmp_path, mon
     installed = {path.relative_to(share) for path in (share / 'config').rglob('*')
                  if path.is_file()}
     assert shipped and shipped == installed
+    for folder, name in (('launch', 'rigid_sim.launch.py'), ('rviz', 'rigid_sim.rviz')):
+        assert (share / folder / name).read_text() == (ROOT / folder / name).read_text()
     monkeypatch.setenv('AMENT_PREFIX_PATH', str(prefix))
     assert Path(get_package_share_directory('rigid_sim')) == share
 

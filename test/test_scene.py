@@ -13,7 +13,6 @@ import trimesh
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs
@@ -139,7 +138,7 @@ def test_only_listed_effects_are_built():
     assert effect_kinds(build_world(parse_scene(only_gravity))) == [Gravity.__name__]
     everything = build_world(parse_scene(copy.deepcopy(VALID)))
     assert effect_kinds(everything) == sorted(
-        cls.__name__ for cls in (Gravity, Damping, Springs, AppliedWrenches))
+        cls.__name__ for cls in (Gravity, Damping, Springs))
     no_springs = scene_with(put('effects', 'springs', []))
     assert Springs.__name__ not in effect_kinds(build_world(parse_scene(no_springs)))
     torque_free = build_world(load_scene(os.path.join(CONFIG, 'scenes', 'torque_free.yaml')))
@@ -149,7 +148,7 @@ def test_only_listed_effects_are_built():
 def test_wrench_input_mask_reaches_the_effect():
     """A body with wrench_input false is refused a wrench; the others accept one."""
     data = scene_with(lambda d: d['bodies'][1].update(wrench_input=False))
-    wrenches = build_world(parse_scene(data)).effect(AppliedWrenches)
+    wrenches = build_world(parse_scene(data)).inputs
     assert list(wrenches.torqued) == [True, False]
     assert wrenches.max_force == 100.0 and wrenches.max_torque == 10.0
 

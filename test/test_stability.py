@@ -17,7 +17,8 @@ from physics_cases import TILT
 from rigid_sim.bench import cases as accuracy_cases
 from rigid_sim.bench import stability as hard
 from rigid_sim.core import rotation, safeguards
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
+from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.integrators.adaptive import Dopri5
 from rigid_sim.core.safeguards import ENERGY_RTOL, STRANG_BOUND
@@ -190,7 +191,7 @@ def test_absolute_adaptive_tolerance_would_break_similarity(monkeypatch):
     assert np.max(np.abs(states[0] - states[1])) > 1e-6
 
 
-class NonFiniteAbove:
+class NonFiniteAbove(Integrator):
     """An integrator that returns NaN for any step longer than ``limit`` s.
 
     A stand-in for a method past its stability bound; shorter steps give the exact
@@ -201,11 +202,15 @@ class NonFiniteAbove:
 
     def __init__(self, limit):
         self.limit = limit
+        self.evaluations = 0
 
-    def step(self, y, time, dt):
-        y = y.copy()
-        y[:, POSITION] += dt * 1.0
-        return y * np.nan if dt > self.limit else y
+    def _advance(self, y, time, h, substeps):
+        for k in range(substeps):
+            y[:, POSITION] += h * 1.0
+            if h > self.limit:
+                y *= np.nan
+                return k + 1
+        return 0
 
 
 def free_world(integrator=DEFAULT_INTEGRATOR):

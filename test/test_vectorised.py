@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
@@ -57,12 +57,12 @@ def build(members, integrator):
         specs.append(SpringSpec(members.index(PAIR[0]), np.array([0.0, 0.1, 0.0]), 15.0, 0.2,
                                 0.3, other=members.index(PAIR[1]),
                                 other_point=np.array([0.1, 0.0, 0.0])))
-    effects = [Gravity(bodies, (0.0, 0.0, -9.81)), Damping(bodies, 0.05, 0.02), wrenches,
+    effects = [Gravity(bodies, (0.0, 0.0, -9.81)), Damping(bodies, 0.05, 0.02),
                Springs(bodies, specs)]
     y = initial_state(bodies, ORIGIN[members], ORIENTATION[members], VELOCITY[members],
                       SPIN[members])
     return World(bodies, y, effects, integrator, tolerance=ADAPTIVE_TOLERANCE,
-                 auto_substep=False)
+                 auto_substep=False, inputs=wrenches)
 
 
 def advance(world):

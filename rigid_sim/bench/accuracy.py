@@ -142,27 +142,27 @@ def case_table(results, case):
     return bench.markdown_table(header, rows)
 
 
-def cheapest(results, case_key, level, methods):
-    """Return the least CPU time among ``methods`` reaching orientation error <= ``level``."""
+def cheapest(results, case_key, level, methods, kind='orientation'):
+    """Return the least CPU time among ``methods`` reaching a ``kind`` error <= ``level``."""
     hits = [r for r in results if r.case == case_key and r.method in methods
-            and r.orientation_error <= level]
+            and r.error(kind) <= level]
     return min(hits, key=lambda r: r.cpu_time, default=None)
 
 
-def cost_per_accuracy(results, case_key='tumbling'):
-    """Markdown: per error level, the cheapest rigid_sim run against MuJoCo RK4's."""
+def cost_per_accuracy(results, case_key='tumbling', kind='orientation'):
+    """Markdown: per ``kind`` error level, the cheapest rigid_sim run against MuJoCo RK4's."""
     ours = set(REGISTRY)
     rows = []
     for level in ERROR_LEVELS:
-        best = cheapest(results, case_key, level, ours)
-        theirs = cheapest(results, case_key, level, {'mujoco RK4'})
+        best = cheapest(results, case_key, level, ours, kind)
+        theirs = cheapest(results, case_key, level, {'mujoco RK4'}, kind)
         describe = (lambda r: '-' if r is None else
                     f'{r.method} {"tol " if r.adaptive else "dt "}{r.setting:g}: '
                     f'{1e3 * r.cpu_time:.3g} ms')
         ratio = f'{best.cpu_time / theirs.cpu_time:.2g}' if best and theirs else '-'
         rows.append((f'{level:.0e}', describe(best), describe(theirs), ratio))
     return bench.markdown_table(
-        ('orientation error <=', 'cheapest rigid_sim', 'MuJoCo RK4', 'CPU ratio (ours/MuJoCo)'),
+        (f'{kind} error <=', 'cheapest rigid_sim', 'MuJoCo RK4', 'CPU ratio (ours/MuJoCo)'),
         rows)
 
 
@@ -227,9 +227,10 @@ def report(results, skipped, cases, plot_path, versions):
     if plot_path is not None:
         parts += ['### Work-precision plot', f'![error against CPU time]({plot_path})']
     keys = [case.key for case in cases]
-    if 'tumbling' in keys:
-        parts += ['### Tumbling: cheapest run at each orientation-error level',
-                  cost_per_accuracy(results)]
+    for case in cases:
+        if case.mujoco and case.key != 'fast_spin':
+            parts += [f'### Cheapest run at each {case.primary}-error level, {case.key}',
+                      cost_per_accuracy(results, case.key, case.primary)]
     if 'fast_spin' in keys:
         parts += ['### Fast spin at dt = 1e-2: energy', energy_at_step(results)]
     return '\n\n'.join(parts)

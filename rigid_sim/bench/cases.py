@@ -23,7 +23,7 @@ import numpy as np
 
 from rigid_sim.bench import oracles
 from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.safeguards import UNIT_QUATERNION_SLACK
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -62,7 +62,7 @@ class Case:
     steps: tuple          # fixed steps to sweep, s, largest first
     torque_free: bool     # |L| is conserved
     primary: str          # 'orientation' or 'position': the error the plot shows
-    mujoco: bool          # MuJoCo can run it as a bare free body
+    mujoco: bool          # MuJoCo runs it too (see mujoco_baseline)
 
     def build(self, integrator, tolerance=1e-6):
         """Return a fresh World running this case with the named integrator."""
@@ -71,19 +71,21 @@ class Case:
         start, velocity = SPRING_START if self.key == 'spring' else (np.zeros(3), np.zeros(3))
         y0 = initial_state(bodies, [start], [IDENTITY], [velocity], [self.omega0])
         # The bare method: the benchmark measures each integrator, not the safeguards.
-        return World(bodies, y0, self._effects(bodies), integrator=integrator,
-                     tolerance=tolerance, auto_substep=False)
+        effects, inputs = self._effects_and_inputs(bodies)
+        return World(bodies, y0, effects, integrator=integrator, tolerance=tolerance,
+                     auto_substep=False, inputs=inputs)
 
-    def _effects(self, bodies):
+    def _effects_and_inputs(self, bodies):
+        """The case's effects and its held wrenches (None: no input)."""
         if self.key == 'spring':
             spec = SpringSpec(body=0, point=np.zeros(3), stiffness=SPRING_STIFFNESS,
                               damping=SPRING_DAMPING, anchor=np.zeros(3))
-            return [Springs(bodies, [spec])]
+            return [Springs(bodies, [spec])], None
         if self.key == 'offset_force':
             push = AppliedWrenches(bodies)
             push.hold(0, 'push', 'world_point', PUSH_FORCE, point=PUSH_POINT)
-            return [push]
-        return []
+            return [], push
+        return [], None
 
     def energy(self, world):
         """Energy this case tracks, J.
@@ -202,8 +204,8 @@ CASES = (
          20.0, (0.1, 50.0, 0.1), LONG_STEPS + FIXED_STEPS[2:] + (5e-4, 2e-4), True,
          'orientation', True),
     Case('spring', 'spring-damper at the centre of mass (1 Hz, zeta 0.016), spin about axis 3',
-         10.0, (0.0, 0.0, 1.0), FIXED_STEPS, False, 'position', False),
+         10.0, (0.0, 0.0, 1.0), FIXED_STEPS, False, 'position', True),
     Case('offset_force', 'constant world force at an offset point, omega0 = (0.3, 0.2, 4)',
-         10.0, (0.3, 0.2, 4.0), FIXED_STEPS, False, 'orientation', False),
+         10.0, (0.3, 0.2, 4.0), FIXED_STEPS, False, 'orientation', True),
 )
 CASES_BY_KEY = {case.key: case for case in CASES}

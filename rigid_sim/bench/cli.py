@@ -5,7 +5,7 @@ import argparse
 import sys
 
 from rigid_sim.bench import (MissingPackage, accuracy, flood, inertia_cost, node_rate,
-                             stability, throughput)
+                             stability, startup, throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
@@ -13,6 +13,7 @@ SUBCOMMANDS = (
     ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
     ('node', node_rate, 'the node at scale: real-time factor and tick time against N'),
     ('stability', stability, 'the hard cases through every integrator'),
+    ('startup', startup, 'process start to the first step, with and without compiled kernels'),
     ('throughput', throughput, 'CPU time per body-step against the number of bodies'),
 )
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rigid_sim import bench
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import SpringSpec, Springs
@@ -34,10 +34,11 @@ SECTION = 'rigid_sim_bench stability'
 
 def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_substep=True,
           mass=1.0, scale=1.0, position=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0),
-          orientation=IDENTITY, com=(0.0, 0.0, 0.0)):
+          orientation=IDENTITY, com=(0.0, 0.0, 0.0), inputs=None):
     """Return a world of bodies with principal moments ``mass scale^2 moments`` (N, 3), kg m^2.
 
-    ``effects`` is a list of callables ``bodies -> effect``; ``omega`` (N, 3) rad/s, world.
+    ``effects`` is a list of callables ``bodies -> effect``, ``inputs`` one
+    ``bodies -> AppliedWrenches`` (None: no input); ``omega`` (N, 3) rad/s, world.
     """
     moments = np.atleast_2d(np.asarray(moments, dtype=float))
     count = len(moments)
@@ -51,7 +52,7 @@ def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_subste
     y0 = initial_state(bodies, rows(position, 3), rows(orientation, 4), rows(velocity, 3),
                        rows(omega, 3))
     return World(bodies, y0, [make(bodies) for make in effects], integrator,
-                 auto_substep=auto_substep)
+                 auto_substep=auto_substep, inputs=None if inputs is None else inputs(bodies))
 
 
 def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):
@@ -64,7 +65,7 @@ def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):
 
 
 def pushed(force, point, max_force=1e4, max_torque=1e4, expires=np.inf):
-    """Effect builder: a world-axes ``force`` held at body point ``point``, until ``expires``."""
+    """Inputs builder: a world-axes ``force`` held at body point ``point``, until ``expires``."""
     def make(bodies):
         wrenches = AppliedWrenches(bodies, max_force, max_torque)
         wrenches.hold(0, 'push', 'world_point', force, point=point, expires=expires)
@@ -109,7 +110,7 @@ def fast_spin_case(omega_dt):
         f'fast_spin_{omega_dt:g}', f'fast spin, |omega| dt = {omega_dt:g}, offset force',
         omega_dt / 30.0, 1.0, 10.0, lambda name, auto: world(
             [1.0, 2.0, 3.0], np.array([3.0, -20.0, 22.0]) * 30.0 / np.sqrt(893.0),
-            [pushed(force, point)], name, auto, orientation=TILTED),
+            (), name, auto, orientation=TILTED, inputs=pushed(force, point)),
         torque_free=False, extra_energy=lambda w: point_potential(w, force, point))
 
 
@@ -123,11 +124,10 @@ def scaled_case(key, mass, size, limit):
     return HardCase(
         key, f'{mass:g} kg body of size {size:g} m, spring + push, |omega| dt = 0.5',
         0.05, 2.0, 20.0, lambda name, auto: world(
-            [1.0, 2.0, 3.0], [4.0, -6.0, 7.0], [
-                spring(100.0 * mass, point=np.array([0.0, 0.3, 0.1]) * size),
-                pushed(force, point, limit, limit * size)],
+            [1.0, 2.0, 3.0], [4.0, -6.0, 7.0],
+            [spring(100.0 * mass, point=np.array([0.0, 0.3, 0.1]) * size)],
             name, auto, mass=mass, scale=size, position=np.array([1.0, 0.0, 0.0]) * size,
-            orientation=TILTED),
+            orientation=TILTED, inputs=pushed(force, point, limit, limit * size)),
         torque_free=False, extra_energy=lambda w: point_potential(w, force, point))
 
 
@@ -145,8 +145,8 @@ def impulse_case():
         wrenches.hold(0, 'kick', 'body', np.zeros(3), (0.0, 0.0, torque), expires=dt)
         return wrenches
     return HardCase('impulse', 'impulsive torque: a turn of pi in one step', dt, 0.5, 10.0,
-                    lambda name, auto: world([1.0, 2.0, moment], np.zeros(3), [make], name,
-                                             auto, orientation=TILTED),
+                    lambda name, auto: world([1.0, 2.0, moment], np.zeros(3), (), name,
+                                             auto, orientation=TILTED, inputs=make),
                     torque_free=False, exact_energy=lambda t, e0: e0 if t < dt / 2 else work)
 
 

@@ -10,8 +10,9 @@ costs more than the arithmetic for the small N a robot scene has.
 Two layouts are served. The public functions take body-major arrays, one row per body:
 ``(N, 4)`` quaternions, ``(N, 3)`` vectors, ``(N, 3, 3)`` matrices. The ``*_rows`` functions
 take component-major arrays, one row per component: ``(4, N)``, ``(3, N)``, ``(3, 3, N)``;
-integrators use them because each row is a contiguous run of N numbers, so one numpy call
-advances every body and a row never has to be gathered from N strided places.
+snapshots use them because each row is a contiguous run of N numbers, so one numpy call
+serves every body and a row never has to be gathered from N strided places. The step
+itself runs compiled, on :mod:`rigid_sim.core.kinematics`.
 """
 import numpy as np
 
@@ -26,13 +27,6 @@ _FIRST_SIGN = np.array([-2.0, 2.0, 2.0, 2.0, -2.0, 2.0, 2.0, 2.0, -2.0])[:, None
 _SECOND = np.array([10, 14, 13, 14, 10, 12, 13, 12, 5])
 _SECOND_SIGN = np.array([-2.0, -2.0, 2.0, 2.0, -2.0, -2.0, -2.0, 2.0, -2.0])[:, None]
 _IDENTITY = np.eye(3).reshape(9, 1)
-# q (x) (omega, 0) = Xi(q) omega; Xi's entries as indices into q and their signs.
-_XI_INDEX = np.array([[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]])
-_XI_SIGN = np.array([[1.0, -1.0, 1.0], [1.0, 1.0, -1.0], [-1.0, 1.0, 1.0],
-                     [-1.0, -1.0, -1.0]])[:, :, None]
-# (v, 0) (x) q: the same entries, the cross product's signs flipped.
-_XI_SIGN_LEFT = np.array([[1.0, 1.0, -1.0], [-1.0, 1.0, 1.0], [1.0, -1.0, 1.0],
-                          [-1.0, -1.0, -1.0]])[:, :, None]
 
 
 def matrix_rows(q, out=None, work=None):
@@ -73,11 +67,6 @@ def rotate_rows(matrices, vectors, out=None):
     return np.einsum('ijn,jn->in', matrices, vectors, out=out)
 
 
-def rotate_inverse_rows(matrices, vectors, out=None):
-    """``R^T v`` for (3, 3, N) matrices and (3, N) vectors: (3, N)."""
-    return np.einsum('jin,jn->in', matrices, vectors, out=out)
-
-
 def cross_rows(u, v, out=None, work=None):
     """``u x v`` for (3, N) vector rows: (3, N); ``work`` is optional (6, N) scratch."""
     count = u.shape[1]
@@ -94,32 +83,11 @@ def cross_rows(u, v, out=None, work=None):
     return out
 
 
-def times_pure_rows(q, vector, out=None, work=None):
-    """``q (x) (v, 0)``: quaternion rows (4, N) times pure quaternions (3, N): (4, N).
-
-    ``work`` is optional (4, 3, N) scratch.
-    """
-    return _pure_product(q, vector, _XI_SIGN, out, work)
-
-
-def pure_times_rows(vector, q, out=None, work=None):
-    """``(v, 0) (x) q``: pure quaternions (3, N) times quaternion rows (4, N): (4, N)."""
-    return _pure_product(q, vector, _XI_SIGN_LEFT, out, work)
-
-
-def _pure_product(q, vector, signs, out, work):
-    """``Xi(q) v``, with ``Xi``'s entries taken from ``q`` and signed by ``signs``."""
-    work = np.empty((4, 3, q.shape[1])) if work is None else work
-    q.take(_XI_INDEX, axis=0, out=work, mode='clip')
-    work *= signs
-    return np.einsum('ijn,jn->in', work, vector, out=out)
-
-
 def multiply_rows(p, q):
     """Hamilton product ``p q`` of quaternion rows (4, N) each: (4, N)."""
-    product = times_pure_rows(p, q[:3])
-    product[:3] += p[:3] * q[3]
-    product[3] += p[3] * q[3]
+    product = np.empty(np.broadcast_shapes(p.shape, q.shape))
+    product[:3] = p[3] * q[:3] + q[3] * p[:3] + np.cross(p[:3], q[:3], axis=0)
+    product[3] = p[3] * q[3] - np.einsum('in,in->n', p[:3], q[:3])
     return product
 
 

@@ -1,9 +1,7 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
 """Step safeguards: substeps within each method's bounds, and no non-finite state, ever.
 
 Before a step the world asks :class:`StepGuard` how many equal substeps keep the chosen
-method within its bounds (:data:`BOUNDS`, keyed by integrator name):
+method within its bounds (its ``bound``, a :class:`StepBound` each integrator carries):
 
 ``oscillation``  ``w h`` for the fastest spring (``sqrt(k / m_eff)``) or damper (``c / m_eff``,
                  or a damping rate), a fixed property of the scene computed once;
@@ -14,17 +12,15 @@ method within its bounds (:data:`BOUNDS`, keyed by integrator name):
 
 A step whose result holds a non-finite value is thrown away and tried again in twice as many
 substeps, at most :data:`MAX_HALVINGS` times; see :meth:`rigid_sim.core.world.World.step`.
+The bounds are numbers of this module; the integrators name theirs from here.
 """
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
-from rigid_sim.core.effects.damping import Damping
-from rigid_sim.core.effects.springs import Springs
-from rigid_sim.core.state import ANGULAR_MOMENTUM, ORIENTATION
+from rigid_sim.core import kinematics
+from rigid_sim.core.dispatch import CompiledCall
 
 # Relative energy error the node's default integrator promises on every hard case.
 ENERGY_RTOL = 1e-3
@@ -50,9 +46,7 @@ KEEP_MARGIN = 1.5
 MAX_SUBSTEPS = 1000
 # A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
 MAX_HALVINGS = 4
-# Integrators return unit quaternions. One off by more than this overflowed before it was
-# normalised (to zeros: finite, but no rotation at all), and it is treated like a NaN.
-UNIT_QUATERNION_SLACK = 1e-6
+UNIT_QUATERNION_SLACK = kinematics.UNIT_QUATERNION_SLACK
 
 
 @dataclass(frozen=True)
@@ -66,20 +60,14 @@ class StepBound:
 
 
 UNBOUNDED = StepBound(math.inf, math.inf, False, 'none')
-BOUNDS = {
-    # The default: energy within ENERGY_RTOL; torque-free bodies move exactly at any step.
-    'exact_split': StepBound(STRANG_BOUND, STRANG_BOUND, False, 'accuracy'),
-    'exact_split4': StepBound(YOSHIDA_BOUND, YOSHIDA_BOUND, False, 'accuracy'),
-    'dlm': StepBound(STRANG_BOUND, STRANG_BOUND, True, 'accuracy'),
-    'dlm4': StepBound(YOSHIDA_BOUND, YOSHIDA_BOUND, True, 'accuracy'),
-    'rk4': StepBound(RK4_BOUND, RK4_BOUND, True, 'stability'),
-    'rk4_world': StepBound(RK4_BOUND, RK4_BOUND, True, 'stability'),
-    'semi_implicit_euler': StepBound(SYMPLECTIC_EULER_BOUND, math.inf, False, 'stability'),
-    # Unstable at every step (|1 + i w h| > 1): substeps would only slow the growth.
-    'euler': UNBOUNDED,
-    # Error-controlled: it chooses its own internal steps.
-    'dopri5': UNBOUNDED,
-}
+# The exact-flow splittings: energy within ENERGY_RTOL; torque-free bodies move exactly at
+# any step. The DLM ones approximate every body's rotation.
+STRANG_ACCURACY = StepBound(STRANG_BOUND, STRANG_BOUND, False, 'accuracy')
+YOSHIDA_ACCURACY = StepBound(YOSHIDA_BOUND, YOSHIDA_BOUND, False, 'accuracy')
+STRANG_ACCURACY_ALL = StepBound(STRANG_BOUND, STRANG_BOUND, True, 'accuracy')
+YOSHIDA_ACCURACY_ALL = StepBound(YOSHIDA_BOUND, YOSHIDA_BOUND, True, 'accuracy')
+RK4_STABILITY = StepBound(RK4_BOUND, RK4_BOUND, True, 'stability')
+SYMPLECTIC_EULER_STABILITY = StepBound(SYMPLECTIC_EULER_BOUND, math.inf, False, 'stability')
 
 
 @dataclass
@@ -101,37 +89,34 @@ def check_time_step(dt):
     return dt
 
 
-def oscillation_rate(effects):
-    """Fastest spring frequency or damping rate of ``effects``, 1/s (0 when none)."""
-    rates = [0.0]
-    for effect in effects:
-        if isinstance(effect, Springs):
-            rates.append(effect.fastest_rate())
-        elif isinstance(effect, Damping):
-            rates.append(max(effect.linear, effect.angular))
-    return max(rates)
+def failure_message(code, substeps, h):
+    """What an integrator's failure ``code`` (see ``Integrator.advance``) met, in words."""
+    where = f'substep {abs(code)}/{substeps} of {h:.3g} s'
+    if code > 0:
+        return f'non-finite state in {where}'
+    return f'orientation lost (quaternion overflowed) in {where}'
 
 
 class StepGuard:
-    """How many substeps a step of ``dt`` needs, from arrays over the bodies.
+    """How many substeps a step of ``dt`` needs, from the state and the inputs held.
 
     Parameters
     ----------
     bodies : RigidBodies
-    effects : the world's effects; only springs, dampers and torques cost anything here
+    effects : the world's effects (each declares its ``fastest_rate`` and ``torqued``)
+    inputs : AppliedWrenches, the world's inputs: they torque only the bodies holding one
     """
 
-    def __init__(self, bodies, effects):
-        self._inertia_inv_rows = bodies.inertia_body_inv_rows
-        self._rate = oscillation_rate(effects)
-        self._wrenches = [e for e in effects if isinstance(e, AppliedWrenches)]
-        # Bodies torqued whatever happens; applied wrenches torque only while one is held.
+    def __init__(self, bodies, effects, inputs):
+        self._inertia_inv = bodies.model.inertia_inv
+        self._rate = max([0.0] + [effect.fastest_rate() for effect in effects])
+        self._inputs = inputs
         self._always_torqued = np.zeros(bodies.count, dtype=bool)
         for effect in effects:
-            if not isinstance(effect, AppliedWrenches):
-                self._always_torqued |= effect.torqued
-        self._may_torque = bool(self._always_torqued.any() or self._wrenches)
-        self._last_spin = (None, None, 0.0)   # (state, covered bodies, their largest |omega|)
+            self._always_torqued |= effect.torqued
+        self._may_torque = bool(self._always_torqued.any() or inputs.torqued.any())
+        self._last_spin = (None, None, 0.0)   # (state, inputs version, their largest |omega|)
+        self._largest_spin = CompiledCall(kinematics.largest_spin)
 
     def plan(self, integrator, y, dt, current=1):
         """Substeps (int) and the reason ('' for one) for a step of ``dt`` from ``y``.
@@ -140,7 +125,7 @@ class StepGuard:
         the fractions of the two bounds add. ``current`` is the count of the last step: it
         is kept until the need falls well below it (see :data:`KEEP_MARGIN`).
         """
-        bound = BOUNDS.get(integrator.name, UNBOUNDED)
+        bound = integrator.bound
         oscillation = self._rate * dt / bound.oscillation
         spin = self.spin_rate(bound, y) * dt / bound.rotation
         need = oscillation + spin
@@ -166,54 +151,11 @@ class StepGuard:
         """
         if bound.rotation == math.inf or not (bound.rotation_all or self._may_torque):
             return 0.0
-        covered = None if bound.rotation_all else self._torqued_now()
-        last_y, last_covered, last_rate = self._last_spin
-        if y is last_y and (covered is None if last_covered is None
-                            else covered is not None and np.array_equal(covered, last_covered)):
+        version = None if bound.rotation_all else self._inputs.version
+        last_y, last_version, last_rate = self._last_spin
+        if y is last_y and version == last_version:
             return last_rate
-        rate = self._largest_omega(y.T, covered)
-        self._last_spin = (y, covered, rate)
+        rate = self._largest_spin(y, self._inertia_inv, self._always_torqued,
+                                  self._inputs.held_mask, bound.rotation_all)
+        self._last_spin = (y, version, rate)
         return rate
-
-    def _largest_omega(self, rows, covered):
-        """Largest ``|omega|`` of the ``covered`` (N,) bool bodies (None: all) of ``rows``."""
-        inertia_inv = self._inertia_inv_rows
-        if covered is not None:
-            if not covered.any():
-                return 0.0
-            if not covered.all():   # a gather only when some bodies are left out
-                rows, inertia_inv = rows[:, covered], inertia_inv[:, :, covered]
-        matrices = rotation.matrix_rows(rows[ORIENTATION])
-        body_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
-        omega_body = rotation.rotate_rows(inertia_inv, body_l)
-        return math.sqrt(np.max(np.einsum('in,in->n', omega_body, omega_body)))
-
-    def _torqued_now(self):
-        """(N,) bool: bodies some effect may torque during the coming step."""
-        torqued = self._always_torqued
-        for wrenches in self._wrenches:
-            torqued = torqued | wrenches.held_mask
-        return torqued
-
-
-def finite_steps(integrator, y, time, dt, substeps):
-    """Advance ``y`` by ``dt`` in ``substeps`` equal steps, unless a step fails.
-
-    Returns (state (N, 13) or None, '' or the failure): None at a non-finite value or a lost
-    orientation. Floating-point warnings are silenced here because a non-finite result is
-    handled, not reported twice.
-    """
-    h = dt / substeps
-    try:
-        with np.errstate(all='ignore'):
-            for k in range(substeps):
-                y = integrator.step(y, time + k * h, h)
-                if not np.isfinite(y).all():
-                    return None, f'non-finite state in substep {k + 1}/{substeps} of {h:.3g} s'
-                q = y[:, ORIENTATION]
-                if np.any(np.abs(np.einsum('ij,ij->i', q, q) - 1.0) > UNIT_QUATERNION_SLACK):
-                    return None, (f'orientation lost (quaternion overflowed) in substep '
-                                  f'{k + 1}/{substeps} of {h:.3g} s')
-    except ArithmeticError as error:   # dopri5 raises when its step size collapses
-        return None, f'{type(error).__name__}: {error}'
-    return y, ''

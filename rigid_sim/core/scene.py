@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core import rotation
-from rigid_sim.core.effects.applied_wrench import (
+from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
@@ -302,8 +302,8 @@ EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **setting
 def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
     """Return the :class:`World` of ``scene``, with only the effects the scene lists.
 
-    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. Applied wrenches
-    are built only when some body takes wrench input.
+    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. The world's
+    inputs accept wrenches on the bodies that take wrench input, within the scene's limits.
     """
     def stacked(get):
         return np.array([get(body) for body in scene.bodies], dtype=float)
@@ -319,9 +319,8 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
     effects = [EFFECT_BUILDERS[kind](bodies, settings)
                for kind, settings in scene.effects.items()]
     accepts = [body.wrench_input for body in scene.bodies]
-    if any(accepts):
-        effects.append(AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts))
-    return World(bodies, initial, effects, integrator, tolerance)
+    inputs = AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts)
+    return World(bodies, initial, effects, integrator, tolerance, inputs=inputs)
 
 
 def check_world_frame(scene, world_frame):

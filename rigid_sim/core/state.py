@@ -8,10 +8,12 @@ See docs/conventions.md for the layout and frames.
 """
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import rotation
+from rigid_sim.core import kinematics, rotation
 from rigid_sim.core.inertia import check_inertia
 
 POSITION = slice(0, 3)
@@ -19,6 +21,15 @@ ORIENTATION = slice(3, 7)
 LINEAR_MOMENTUM = slice(7, 10)
 ANGULAR_MOMENTUM = slice(10, 13)
 STATE_WIDTH = 13
+
+
+class Model(NamedTuple):
+    """The static model the compiled kernels read: arrays over the N bodies."""
+
+    inverse_mass: np.ndarray   # (N,) 1/kg
+    inertia_inv: np.ndarray    # (N, 3, 3) ``I_body^-1``, body axes, 1/(kg m^2)
+    moments: np.ndarray        # (N, 3) principal moments, ascending, kg m^2
+    principal: np.ndarray      # (N, 4) quaternion (x, y, z, w), principal axes to body axes
 
 
 @dataclass(frozen=True)
@@ -64,9 +75,12 @@ class RigidBodies:
         return np.linalg.inv(self.inertia_body)
 
     @cached_property
-    def inertia_body_inv_rows(self):
-        """(3, 3, N) ``I_body^-1``, one row per matrix entry (component-major)."""
-        return np.ascontiguousarray(self.inertia_body_inv.transpose(1, 2, 0))
+    def model(self):
+        """The :class:`Model` of these bodies."""
+        moments, axes = self.principal_moments
+        return Model(np.ascontiguousarray(self.inverse_mass),
+                     np.ascontiguousarray(self.inertia_body_inv), np.ascontiguousarray(moments),
+                     np.ascontiguousarray(Rotation.from_matrix(axes).as_quat()))
 
     @cached_property
     def inverse_mass(self):
@@ -125,41 +139,20 @@ def initial_state(bodies, origin, orientation, linear_velocity, angular_velocity
 class Snapshot:
     """Kinematics of every body at one instant, each quantity computed once when first asked.
 
-    Effects and diagnostics share one snapshot per integrator stage, so ``R`` and
-    ``omega`` are not recomputed by every effect that needs them.
+    Outputs, energies and diagnostics share one snapshot, so ``R`` and ``omega`` are not
+    recomputed by every reader.
 
     Parameters
     ----------
     bodies : RigidBodies
-    y : (N, 13) float
-        Packed state; integrators pass the transpose of their component-major (13, N) rows.
+    y : (N, 13) float, packed state [x, q, P, L]
     time : float, s
-    rotation : (N, 3, 3) float, optional
-        ``R`` if the caller has it.
-    rotation_rows : (3, 3, N) float, optional
-        ``R`` component-major, as integrators hold it.
-    completion : callable, optional
-        Finishes ``y`` in place the first time anyone reads it: integrators that work in
-        body axes fill world ``L`` only for effects that read the state.
     """
 
-    def __init__(self, bodies, y, time, rotation=None, rotation_rows=None, completion=None):
+    def __init__(self, bodies, y, time):
         self.bodies = bodies
-        self._y = y
-        self._completion = completion
+        self.y = np.ascontiguousarray(y, dtype=float)
         self.time = time
-        if rotation is not None:  # the caller already has R: seed the cache
-            rotation_rows = np.asarray(rotation).transpose(1, 2, 0)
-        if rotation_rows is not None:
-            self.__dict__['rotation_rows'] = rotation_rows
-
-    @property
-    def y(self):
-        """(N, 13) packed state [x, q, P, L]."""
-        if self._completion is not None:
-            completion, self._completion = self._completion, None
-            completion()
-        return self._y
 
     @cached_property
     def rotation_rows(self):
@@ -182,11 +175,9 @@ class Snapshot:
 
     @cached_property
     def angular_velocity(self):
-        """(N, 3) ``omega = R I_body^-1 R^T L``, world, rad/s."""
-        matrices = self.rotation_rows
-        body_l = rotation.rotate_inverse_rows(matrices, self.y.T[ANGULAR_MOMENTUM])
-        body_omega = rotation.rotate_rows(self.bodies.inertia_body_inv_rows, body_l)
-        return rotation.rotate_rows(matrices, body_omega).T
+        """(N, 3) angular velocity, world, rad/s (see :func:`kinematics.angular_velocity`)."""
+        return kinematics.angular_velocities(self.y, self.bodies.model.inertia_inv,
+                                             np.empty((self.bodies.count, 3)))
 
     @cached_property
     def com_offset(self):

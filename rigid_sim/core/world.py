@@ -1,10 +1,17 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
-"""The world: bodies, their state, the effects the scene lists, and one integrator."""
+"""The world: a static model, the packed state, its inputs, the scene's effects, one integrator.
+
+As a compiled engine separates model, data and inputs, the World keeps apart what never
+changes while stepping (``bodies.model`` and the effects' parameter arrays), the state
+``y`` (N, 13) that every step replaces, and the inputs (``inputs``: held wrenches, with their
+hold ends). The integrator's kernel is compiled for exactly the listed effects.
+"""
+import sys
+
 import numpy as np
 
 from rigid_sim.core import safeguards
-from rigid_sim.core.effects.applied_wrench import AppliedWrenches
+from rigid_sim.core.effects.base import accumulate
+from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.state import STATE_WIDTH, Snapshot
 
@@ -22,10 +29,12 @@ class World:
     auto_substep : bool, split steps that exceed the integrator's bounds
         (:mod:`rigid_sim.core.safeguards`); False runs the bare method, as benchmarks of the
         methods themselves need. Non-finite steps are rejected either way.
+    inputs : AppliedWrenches, optional
+        The wrenches held on the bodies; by default none of them takes wrench input.
     """
 
     def __init__(self, bodies, initial, effects=(), integrator='rk4', tolerance=1e-6,
-                 auto_substep=True):
+                 auto_substep=True, inputs=None):
         self.bodies = bodies
         self.initial = np.array(initial, dtype=float)
         shape = (bodies.count, STATE_WIDTH)
@@ -33,19 +42,35 @@ class World:
             raise ValueError(f'initial state must be a finite {shape} array, got shape '
                              f'{self.initial.shape}')
         self.effects = list(effects)
-        self.torqued = np.zeros(bodies.count, dtype=bool)
+        self.inputs = (AppliedWrenches(bodies, accepts=np.zeros(bodies.count, dtype=bool))
+                       if inputs is None else inputs)
+        self.torqued = self.inputs.torqued.copy()
         for effect in self.effects:
             self.torqued |= effect.torqued
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
-        self._expiring = [e for e in self.effects if hasattr(e, 'expire')]
+        self._effect_parameters = tuple(effect.parameters for effect in self.effects)
         self.integrator = make_integrator(integrator, self, tolerance)
         self.auto_substep = bool(auto_substep)
-        self._guard = safeguards.StepGuard(bodies, self.effects)
-        self._restart()   # keeps wrenches the effects were given before the world was built
+        self._guard = safeguards.StepGuard(bodies, self.effects, self.inputs)
+        self._restart()   # keeps wrenches the inputs were given before the world was built
+
+    @property
+    def y(self):
+        """(N, 13) packed state [x, q, P, L]; a step replaces it, never writes it in place."""
+        return self._y
+
+    @y.setter
+    def y(self, state):
+        self._y = np.ascontiguousarray(state, dtype=float)
+        self._spare = None
 
     def effect(self, kind):
-        """Return the effect of class ``kind`` in this world, or None when the scene has none."""
+        """The effect of class ``kind`` in this world, or None when the scene has none."""
         return next((e for e in self.effects if isinstance(e, kind)), None)
+
+    def effect_parameters(self):
+        """The parameters the compiled wrench sum reads: each effect's, then the inputs'."""
+        return self._effect_parameters + (self.inputs.parameters,)
 
     def reset(self):
         """Back to the initial state at time 0, with no wrench held.
@@ -53,9 +78,7 @@ class World:
         A held wrench belongs to the run that set it: its hold ends at a time of that run.
         """
         self._restart()
-        applied = self.effect(AppliedWrenches)
-        if applied is not None:
-            applied.release()
+        self.inputs.release()
 
     def _restart(self):
         self.y = self.initial.copy()
@@ -63,11 +86,11 @@ class World:
         self.diagnostics = safeguards.StepDiagnostics()
 
     def wrench(self, snapshot):
-        """Net world force and torque about the centre of mass, (N, 3) each."""
-        force = np.zeros((self.bodies.count, 3))
-        torque = np.zeros((self.bodies.count, 3))
-        for effect in self.effects:
-            effect.accumulate(snapshot, force, torque)
+        """Net world force and torque about the centre of mass, (N, 3) each, N and N m."""
+        force = np.empty((self.bodies.count, 3))
+        torque = np.empty((self.bodies.count, 3))
+        accumulate(self.effect_parameters(), snapshot.y, snapshot.time, self.bodies.model,
+                   force, torque)
         return force, torque
 
     def net_wrench(self):
@@ -84,9 +107,8 @@ class World:
         non-positive ``dt``.
         """
         dt = safeguards.check_time_step(dt)
-        for effect in self._expiring:
-            effect.expire(self.time)
-        substeps, reason = self._plan(self.y, dt, self.diagnostics.substeps)
+        self.inputs.expire(self.time)
+        substeps, reason = self._plan(self._y, dt, self.diagnostics.substeps)
         y = self._attempt(dt, substeps)
         if y is not None and self.auto_substep:
             # A wrench may spin a body up within the step: redo it if the end breaks the bound.
@@ -99,7 +121,7 @@ class World:
         if y is None:
             diagnostics.failed_steps += 1
             return False
-        self.y = y
+        self._spare, self._y = self._y, y
         self.time += dt
         return True
 
@@ -109,19 +131,35 @@ class World:
         return self._guard.plan(self.integrator, y, dt, current)
 
     def _attempt(self, dt, substeps):
-        """Return the state after ``dt``, retried in more substeps if non-finite (None: failed)."""
+        """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
         for halving in range(safeguards.MAX_HALVINGS + 1):
-            y, failure = safeguards.finite_steps(self.integrator, self.y, self.time, dt,
-                                                 substeps << halving)
-            if y is not None:
+            pieces = substeps << halving
+            y = self._scratch()
+            y[...] = self._y
+            try:
+                code = self.integrator.advance(y, self.time, dt, pieces)
+                failure = safeguards.failure_message(code, pieces, dt / pieces) if code else ''
+            except ArithmeticError as error:   # dopri5 raises when its step size collapses
+                failure = f'{type(error).__name__}: {error}'
+            if not failure:
                 return y
             self.diagnostics.rejected_steps += 1
             self.diagnostics.last_failure = f't = {self.time:.6g} s: {failure}'
         return None
 
+    def _scratch(self):
+        """An (N, 13) array to step into: the state the last step replaced, when no one else
+        holds it (a fresh array at large N costs page faults), else a new one."""
+        spare = self._spare
+        # References: this attribute, the local name and getrefcount's own argument.
+        if spare is None or sys.getrefcount(spare) > 3 or spare is self._y:
+            spare = np.empty_like(self._y)
+        self._spare = None
+        return spare
+
     def snapshot(self):
         """Kinematics of the current state."""
-        return Snapshot(self.bodies, self.y, self.time)
+        return Snapshot(self.bodies, self._y, self.time)
 
     def energy(self):
         """Total mechanical energy, J: kinetic plus every effect's potential."""

@@ -6,23 +6,45 @@
 ``exp(-c t)`` whatever the mass, size or tumbling of a body, so one coefficient means the
 same thing for a microgram part and a crane load, and the decay has a closed form to test.
 """
+from typing import NamedTuple
+
 import numpy as np
+from numba import njit
 
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM
+from rigid_sim.core.effects.base import Effect, kernel_for
 
 
-class Damping:
+class DampingParameters(NamedTuple):
+    """What the compiled kernel reads."""
+
+    linear: float    # 1/s
+    angular: float   # 1/s
+
+
+class Damping(Effect):
     """Momentum damping with rates ``linear`` and ``angular`` in 1/s."""
 
+    velocity_dependent = True
+
     def __init__(self, bodies, linear=0.0, angular=0.0):
+        super().__init__(bodies)
         self.linear = float(linear)
         self.angular = float(angular)
         self.torqued = np.full(bodies.count, self.angular != 0.0)
-        self.velocity_dependent = True
 
-    def accumulate(self, snapshot, force, torque):
-        force -= self.linear * snapshot.y[:, LINEAR_MOMENTUM]
-        torque -= self.angular * snapshot.y[:, ANGULAR_MOMENTUM]
+    @property
+    def parameters(self):
+        return DampingParameters(self.linear, self.angular)
 
-    def potential_energy(self, snapshot):
-        return 0.0
+    def fastest_rate(self):
+        return max(self.linear, self.angular)
+
+
+@kernel_for(DampingParameters)
+@njit(cache=True)
+def damping_wrench(parameters, y, time, model, force, torque):
+    """Add ``-c_lin P`` to ``force`` and ``-c_ang L`` to ``torque`` (N, 3)."""
+    for i in range(y.shape[0]):
+        for k in range(3):
+            force[i, k] -= parameters.linear * y[i, 7 + k]
+            torque[i, k] -= parameters.angular * y[i, 10 + k]

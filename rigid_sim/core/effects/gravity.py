@@ -1,24 +1,43 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
 """Uniform gravity: ``F = M g`` at the centre of mass, so it never torques a body."""
-import numpy as np
+from typing import NamedTuple
 
+import numpy as np
+from numba import njit
+
+from rigid_sim.core.effects.base import Effect, kernel_for
 from rigid_sim.core.state import POSITION
 
 
-class Gravity:
+class GravityParameters(NamedTuple):
+    """What the compiled kernel reads."""
+
+    weight: np.ndarray   # (N, 3) N, ``M g`` of each body
+
+
+class Gravity(Effect):
     """Uniform gravitational acceleration acting on every body."""
 
     def __init__(self, bodies, acceleration):
+        super().__init__(bodies)
         self.acceleration = np.asarray(acceleration, dtype=float).reshape(3)
-        # (N, 3) N, precomputed; a view of (3, N) rows, the layout integrators accumulate in.
-        self._weight = (self.acceleration[:, None] * bodies.mass).T
-        self.torqued = np.zeros(bodies.count, dtype=bool)
-        self.velocity_dependent = False
+        self._weight = np.ascontiguousarray(bodies.mass[:, None] * self.acceleration)
 
-    def accumulate(self, snapshot, force, torque):
-        force += self._weight
+    @property
+    def parameters(self):
+        return GravityParameters(self._weight)
 
     def potential_energy(self, snapshot):
         """``-sum M g . x``, J, zero at the world origin."""
         return -float(np.sum(self._weight * snapshot.y[:, POSITION]))
+
+
+@kernel_for(GravityParameters)
+@njit(cache=True)
+def gravity_wrench(parameters, y, time, model, force, torque):
+    """Add each body's weight to ``force`` (N, 3)."""
+    weight = parameters.weight
+    for i in range(y.shape[0]):
+        for k in range(3):
+            force[i, k] += weight[i, k]

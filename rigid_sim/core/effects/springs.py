@@ -1,5 +1,3 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
 """Linear springs with dampers between body points and world anchors or other bodies.
 
 Each spring pulls its two attachment points together with
@@ -7,12 +5,15 @@ Each spring pulls its two attachment points together with
 first; the torque on a body is ``(p - x) x f``. With ``l0 = 0`` the force is the full vector
 ``-k d - c d'`` and stays defined when the points meet.
 """
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
-from scipy import sparse
+from numba import njit
 
-from rigid_sim.core.state import POSITION
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.effects.base import Effect, kernel_for
 
 
 @dataclass(frozen=True)
@@ -29,37 +30,47 @@ class SpringSpec:
     other_point: np.ndarray = None  # (3,) m, in the second body's frame
 
 
-class Springs:
+class SpringParameters(NamedTuple):
+    """The S springs as arrays, what the compiled kernel reads."""
+
+    body: np.ndarray         # (S,) int, first body
+    lever: np.ndarray        # (S, 3) m, first end from its centre of mass, body axes
+    stiffness: np.ndarray    # (S,) N/m
+    damping: np.ndarray      # (S,) N s/m
+    rest: np.ndarray         # (S,) m
+    other: np.ndarray        # (S,) int, second body, -1 for a world anchor
+    other_lever: np.ndarray  # (S, 3) m, second end from its centre of mass, body axes
+    anchor: np.ndarray       # (S, 3) m, world anchor (unused for a second body)
+
+
+class Springs(Effect):
     """All springs of a scene, evaluated together."""
 
     def __init__(self, bodies, specs):
-        self._body = np.array([s.body for s in specs], dtype=int)
-        self._point = np.array([s.point for s in specs], dtype=float).reshape(-1, 3)
-        self._stiffness = np.array([s.stiffness for s in specs], dtype=float)
-        self._damping = np.array([s.damping for s in specs], dtype=float)
-        self._rest = np.array([s.rest_length for s in specs], dtype=float)
-        to_body = np.array([s.other is not None for s in specs], dtype=bool)
-        # Springs to the world get a dummy second body 0; their second end is masked below.
-        self._to_body = to_body
-        self._other = np.array([s.other if s.other is not None else 0 for s in specs], dtype=int)
-        self._other_point = np.array(
-            [s.other_point if s.other is not None else np.zeros(3) for s in specs],
-            dtype=float).reshape(-1, 3)
-        self._anchor = np.array(
-            [s.anchor if s.other is None else np.zeros(3) for s in specs],
-            dtype=float).reshape(-1, 3)
-        self.velocity_dependent = bool(np.any(self._damping != 0.0))
+        super().__init__(bodies)
+        body = np.array([s.body for s in specs], dtype=np.int64)
+        other = np.array([-1 if s.other is None else s.other for s in specs], dtype=np.int64)
+        point = np.array([s.point for s in specs], dtype=float).reshape(-1, 3)
+        other_point = np.array([np.zeros(3) if s.other is None else s.other_point
+                                for s in specs], dtype=float).reshape(-1, 3)
+        com = bodies.com_in_body
+        self._parameters = SpringParameters(
+            body, np.ascontiguousarray(point - com[body]),
+            np.array([s.stiffness for s in specs], dtype=float),
+            np.array([s.damping for s in specs], dtype=float),
+            np.array([s.rest_length for s in specs], dtype=float), other,
+            np.ascontiguousarray(np.where((other >= 0)[:, None],
+                                          other_point - com[np.maximum(other, 0)], 0.0)),
+            np.array([np.zeros(3) if s.anchor is None or s.other is not None else s.anchor
+                      for s in specs], dtype=float).reshape(-1, 3))
+        self.velocity_dependent = bool(np.any(self._parameters.damping != 0.0))
         self._inverse_mass = self._inverse_effective_mass(bodies)
-        self.torqued = np.zeros(bodies.count, dtype=bool)
-        self.torqued[self._body] = True
-        self.torqued[self._other[to_body]] = True
-        # Incidence (N, E) of the E spring ends on the bodies: one sparse product sums every
-        # end's wrench into its body (np.add.at took ~18x as long at 1000 bodies).
-        ends = np.concatenate((self._body, self._other[to_body]))
-        self._incidence = sparse.csr_array(
-            (np.ones(ends.size), (ends, np.arange(ends.size))), shape=(bodies.count, ends.size))
-        self._end_body = ends
-        self._end_point = np.concatenate((self._point, self._other_point[to_body]))
+        self.torqued[body] = True
+        self.torqued[other[other >= 0]] = True
+
+    @property
+    def parameters(self):
+        return self._parameters
 
     def _inverse_effective_mass(self, bodies):
         """(S,) 1/kg: an upper bound on how fast each spring's ends accelerate per newton.
@@ -67,25 +78,23 @@ class Springs:
         A force ``f`` at lever ``r`` from a centre of mass accelerates that point by at most
         ``|f| (1/M + |r|^2 / I_min)``; a spring between bodies moves both ends.
         """
-        moments = bodies.principal_moments[0]
-
-        def end(body, point):
-            lever = point - bodies.com_in_body[body]
-            return 1.0 / bodies.mass[body] + np.sum(lever ** 2, axis=1) / moments[body, 0]
-
-        second = np.where(self._to_body, end(self._other, self._other_point), 0.0)
-        return end(self._body, self._point) + second
+        p, smallest = self._parameters, bodies.principal_moments[0][:, 0]
+        first = 1.0 / bodies.mass[p.body] + np.sum(p.lever ** 2, axis=1) / smallest[p.body]
+        on_body = np.maximum(p.other, 0)
+        second = (1.0 / bodies.mass[on_body]
+                  + np.sum(p.other_lever ** 2, axis=1) / smallest[on_body])
+        return first + np.where(p.other >= 0, second, 0.0)
 
     def natural_frequency(self):
         """(S,) rad/s, an upper bound on each spring's angular frequency ``sqrt(k / m_eff)``.
 
         Exact for a spring at the centre of mass of one body held by a fixed anchor.
         """
-        return np.sqrt(self._stiffness * self._inverse_mass)
+        return np.sqrt(self._parameters.stiffness * self._inverse_mass)
 
     def damping_rate(self):
         """(S,) 1/s, an upper bound on each damper's decay rate ``c / m_eff``."""
-        return self._damping * self._inverse_mass
+        return self._parameters.damping * self._inverse_mass
 
     def fastest_rate(self):
         """1/s, the fastest rate of the springs: the time step must resolve it.
@@ -93,54 +102,95 @@ class Springs:
         Springs sharing a body add their squared frequencies (parallel springs); a damper
         contributes its decay rate. 0 without springs.
         """
-        if not self._stiffness.size:
+        p = self._parameters
+        if not p.stiffness.size:
             return 0.0
-        ends = np.concatenate((self._body, self._other[self._to_body]))
+        on_body = p.other >= 0
+        ends = np.concatenate((p.body, p.other[on_body]))
         squared = self.natural_frequency() ** 2
-        per_body = np.bincount(ends, weights=np.concatenate((squared, squared[self._to_body])))
+        per_body = np.bincount(ends, weights=np.concatenate((squared, squared[on_body])))
         return float(max(np.sqrt(per_body.max()), self.damping_rate().max()))
-
-    def _ends(self, snapshot):
-        """Return the positions of the spring ends on bodies, and of both ends of each spring.
-
-        Returns the world positions (E, 3) of the E ends on bodies (first ends, then second ends on
-        bodies), and the first and second ends' positions and velocities (S, 3) each.
-        """
-        points = snapshot.point_world(self._end_body, self._end_point)
-        velocities = snapshot.point_velocity(self._end_body, points)
-        count, on_body = self._body.size, self._to_body
-        second, second_velocity = self._anchor.copy(), np.zeros_like(self._anchor)
-        second[on_body], second_velocity[on_body] = points[count:], velocities[count:]
-        return points, (points[:count], velocities[:count], second, second_velocity)
-
-    def _tension(self, snapshot):
-        """Force on the first end (S, 3), and the ends (E, 3), from Hooke's law plus damper."""
-        points, (first, first_velocity, second, second_velocity) = self._ends(snapshot)
-        separation = first - second
-        relative_velocity = first_velocity - second_velocity
-        length = np.linalg.norm(separation, axis=1)
-        # Zero rest length: the force is linear in the separation and needs no direction.
-        safe_length = np.where(length > 0.0, length, 1.0)
-        direction = separation / safe_length[:, None]
-        stretch = np.where(self._rest > 0.0, length - self._rest, 0.0)
-        rate = np.sum(relative_velocity * direction, axis=1)
-        along = -(self._stiffness * stretch + self._damping * rate)[:, None] * direction
-        zero_rest = -(self._stiffness[:, None] * separation
-                      + self._damping[:, None] * relative_velocity)
-        force = np.where((self._rest > 0.0)[:, None], along, zero_rest)
-        return force, points
-
-    def accumulate(self, snapshot, force, torque):
-        spring_force, points = self._tension(snapshot)
-        end_force = np.concatenate((spring_force, -spring_force[self._to_body]))
-        lever = points - snapshot.y[self._end_body, POSITION]
-        wrench = self._incidence @ np.concatenate((end_force, np.cross(lever, end_force)),
-                                                  axis=1)
-        force += wrench[:, :3]
-        torque += wrench[:, 3:]
 
     def potential_energy(self, snapshot):
         """``sum k (l - l0)^2 / 2``, J."""
-        first, _, second, _ = self._ends(snapshot)[1]
-        length = np.linalg.norm(first - second, axis=1)
-        return float(0.5 * np.sum(self._stiffness * (length - self._rest) ** 2))
+        p = self._parameters
+        lengths = spring_lengths(p, snapshot.y, np.empty(p.stiffness.size))
+        return float(0.5 * np.sum(p.stiffness * (lengths - p.rest) ** 2))
+
+
+@njit(cache=True)
+def _end_position(y, body, lever, s):
+    """World position of the end at ``lever[s]`` on ``body``, its ``R`` and lever ``R r``."""
+    r = kin.matrix(kin.orientation(y, body))
+    arm = kin.rotate(r, kin.vector(lever, s, 0))
+    return (y[body, 0] + arm[0], y[body, 1] + arm[1], y[body, 2] + arm[2]), r, arm
+
+
+@njit(cache=True)
+def _end(y, model, body, lever, s):
+    """World position, velocity and lever ``R r`` of the end at ``lever[s]`` on ``body``."""
+    position, r, arm = _end_position(y, body, lever, s)
+    inverse_mass = model.inverse_mass[body]
+    omega = kin.angular_velocity(r, model.inertia_inv[body], kin.vector(y, body, 10))
+    spin = kin.cross(omega, arm)
+    velocity = (y[body, 7] * inverse_mass + spin[0], y[body, 8] * inverse_mass + spin[1],
+                y[body, 9] * inverse_mass + spin[2])
+    return position, velocity, arm
+
+
+@njit(cache=True)
+def _tension(p, s, first, second, first_velocity, second_velocity):
+    """Force on the first end of spring ``s``: Hooke's law plus the damper, 3-tuple, N."""
+    d = (first[0] - second[0], first[1] - second[1], first[2] - second[2])
+    dv = (first_velocity[0] - second_velocity[0], first_velocity[1] - second_velocity[1],
+          first_velocity[2] - second_velocity[2])
+    k, c, rest = p.stiffness[s], p.damping[s], p.rest[s]
+    if rest > 0.0:
+        length = math.sqrt(kin.dot(d, d))
+        # A scene refuses both ends at one point; a pass through it reads as no direction.
+        scale = 1.0 / length if length > 0.0 else 1.0
+        u = (d[0] * scale, d[1] * scale, d[2] * scale)
+        along = -(k * (length - rest) + c * kin.dot(dv, u))
+        return (along * u[0], along * u[1], along * u[2])
+    return (-k * d[0] - c * dv[0], -k * d[1] - c * dv[1], -k * d[2] - c * dv[2])
+
+
+@njit(cache=True)
+def _add(force, torque, body, f, arm):
+    """Add the force ``f`` acting at lever ``arm`` (world) on ``body``."""
+    moment = kin.cross(arm, f)
+    for k in range(3):
+        force[body, k] += f[k]
+        torque[body, k] += moment[k]
+
+
+@kernel_for(SpringParameters)
+@njit(cache=True)
+def spring_wrench(p, y, time, model, force, torque):
+    """Add every spring's force and torque on its bodies to ``force``, ``torque`` (N, 3)."""
+    for s in range(p.body.size):
+        first, first_velocity, arm = _end(y, model, p.body[s], p.lever, s)
+        other = p.other[s]
+        if other >= 0:
+            second, second_velocity, other_arm = _end(y, model, other, p.other_lever, s)
+        else:
+            second, second_velocity = kin.vector(p.anchor, s, 0), (0.0, 0.0, 0.0)
+            other_arm = second_velocity
+        f = _tension(p, s, first, second, first_velocity, second_velocity)
+        _add(force, torque, p.body[s], f, arm)
+        if other >= 0:
+            _add(force, torque, other, (-f[0], -f[1], -f[2]), other_arm)
+
+
+@njit(cache=True)
+def spring_lengths(p, y, out):
+    """Length of each spring (S,), m, at the packed state ``y``, into ``out``."""
+    for s in range(p.body.size):
+        first = _end_position(y, p.body[s], p.lever, s)[0]
+        if p.other[s] >= 0:
+            second = _end_position(y, p.other[s], p.other_lever, s)[0]
+        else:
+            second = kin.vector(p.anchor, s, 0)
+        d = (first[0] - second[0], first[1] - second[1], first[2] - second[2])
+        out[s] = math.sqrt(kin.dot(d, d))
+    return out

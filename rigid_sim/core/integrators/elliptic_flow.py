@@ -1,14 +1,16 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
-"""The elliptic branch of the exact free flow, in a body's working frame.
+"""The elliptic branch of the exact free flow, in a body's working frame, compiled per body.
 
 See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the working frame
-(``I1 < I2 < I3`` or reversed, ``m1 >= 0``); quaternions are scalar-last ``(x, y, z, w)``.
+(``I1 < I2 < I3`` or reversed, ``m1 >= 0``); quaternions are scalar-last ``(x, y, z, w)``,
+3-vectors and moments are 3-tuples.
 """
-import numpy as np
-from scipy.special import ellipj, ellipkm1, elliprf, elliprj
+import math
 
-from rigid_sim.core import rotation
+import numpy as np
+from numba import njit
+
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.special import ellipj, ellipkm1, elliprf, elliprj
 
 # Near the separatrix (a spin close to the intermediate axis) cn(u) is as small as
 # ~sqrt(mc) over most of a period, and the orientation needs it to its own relative accuracy:
@@ -27,170 +29,162 @@ AGM_TOL = 1e-9
 AGM_MAX_STEPS = 64
 
 
+@njit(cache=True)
 def separatrix_gap(i, m):
     """``L^2 - 2 E I2``, summed without cancelling the I2 term."""
-    return (m[:, 0] ** 2 * (i[:, 0] - i[:, 1]) / i[:, 0]
-            + m[:, 2] ** 2 * (i[:, 2] - i[:, 1]) / i[:, 2])
+    return m[0] ** 2 * (i[0] - i[1]) / i[0] + m[2] ** 2 * (i[2] - i[1]) / i[2]
 
 
+@njit(cache=True)
+def _sign(x):
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
+
+
+@njit(cache=True)
+def _unit_interval(x):
+    return min(max(x, 0.0), 1.0)
+
+
+@njit(cache=True)
 def _invariants(i, m):
-    """Squared amplitudes and parameters of m(t) in the working frame (see module doc)."""
-    i1, i2, i3 = i.T
-    m1, m2, m3 = (m ** 2).T
+    """Parameters k^2, mc, squared amplitudes' roots (3-tuple) and rate of m(t)."""
+    i1, i2, i3 = i
+    m1, m2, m3 = m[0] ** 2, m[1] ** 2, m[2] ** 2
     above = m1 * (i3 - i1) / i1 + m2 * (i3 - i2) / i2   # 2 E I3 - L^2, no cancellation
     below = m2 * (i2 - i1) / i2 + m3 * (i3 - i1) / i3   # L^2 - 2 E I1, no cancellation
-    k2 = np.clip(above * (i2 - i1) / (below * (i3 - i2)), 0.0, 1.0)
-    mc = np.clip((i3 - i1) * separatrix_gap(i, m) / (below * (i3 - i2)), 0.0, 1.0)
-    amplitude = np.sqrt(np.stack((above * i1 / (i3 - i1), above * i2 / (i3 - i2),
-                                  below * i3 / (i3 - i1)), axis=1))
-    rate = np.sign(m[:, 2]) * np.sign(i3 - i1) * np.sqrt(below * (i3 - i2) / (i1 * i2 * i3))
-    rate = np.where(m[:, 2] == 0.0, np.abs(rate), rate)
+    k2 = _unit_interval(above * (i2 - i1) / (below * (i3 - i2)))
+    mc = _unit_interval((i3 - i1) * separatrix_gap(i, m) / (below * (i3 - i2)))
+    amplitude = (math.sqrt(above * i1 / (i3 - i1)), math.sqrt(above * i2 / (i3 - i2)),
+                 math.sqrt(below * i3 / (i3 - i1)))
+    rate = math.sqrt(below * (i3 - i2) / (i1 * i2 * i3))
+    if m[2] != 0.0:
+        rate *= _sign(m[2]) * _sign(i3 - i1)
     return k2, mc, amplitude, rate
 
 
-def _first_kind(s, c, dn2):
-    """Legendre ``F(phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi."""
-    return s * elliprf(c * c, dn2, 1.0)
-
-
+@njit(cache=True)
 def _pi_minus(nu, s, c, dn2, first_kind):
-    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2.
-
-    ``first_kind`` is ``F(phi | k^2)``, the Carlson R_F part the two integrals share.
-    """
+    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi;
+    ``first_kind`` is ``F(phi | k^2)``, the Carlson R_F part the two integrals share."""
     return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
 
 
-def _complete_pi_minus(nu, mc, turns):
-    """``Pi(-nu | k^2)`` where ``turns`` is non-zero, else 0.
-
-    Only a body that passes a half period in the step needs it, and at small steps few do (each
-    costs two Carlson calls).
-    """
-    complete = np.zeros_like(mc)
-    passing = turns != 0.0
-    if passing.any():
-        nu_p, mc_p = nu[passing], mc[passing]
-        complete[passing] = (elliprf(0.0, mc_p, 1.0)
-                             - nu_p / 3.0 * elliprj(0.0, mc_p, 1.0, 1.0 + nu_p))
-    return complete
-
-
+@njit(cache=True)
 def _sn_cn_complementary(u, mc):
-    """Jacobi ``sn`` and ``cn`` of ``u`` (N,) at parameter ``m = 1 - mc``, from ``mc`` (N,).
+    """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from ``mc`` > 0.
 
     Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
     mean of (1, sqrt(mc)) gives a_n and c_n = (a_{n-1} - b_{n-1}) / 2 until c_N vanishes;
     then phi_N = 2^N a_N u and ``phi_{n-1} = (phi_n + arcsin(c_n / a_n sin phi_n)) / 2``
     down to the amplitude phi_0: sn = sin phi_0, cn = cos phi_0. Started from mc itself, it
-    keeps the accuracy scipy's ``ellipj(u, 1 - mc)`` loses for small mc. Needs mc > 0.
+    keeps the accuracy scipy's ``ellipj(u, 1 - mc)`` loses for small mc.
     """
-    a, b = np.ones_like(mc), np.sqrt(mc)
-    ratios = []
+    a, b = 1.0, math.sqrt(mc)
+    ratios = np.empty(AGM_MAX_STEPS)
+    steps = 0
     for _ in range(AGM_MAX_STEPS):
         c = 0.5 * (a - b)
-        a, b = 0.5 * (a + b), np.sqrt(a * b)
-        ratios.append(c / a)
-        if np.all(ratios[-1] < AGM_TOL):
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        ratios[steps] = c / a
+        steps += 1
+        if ratios[steps - 1] < AGM_TOL:
             break
-    phi = 2.0 ** len(ratios) * a * u
-    for ratio in reversed(ratios):
-        phi = 0.5 * (phi + np.arcsin(ratio * np.sin(phi)))
-    return np.sin(phi), np.cos(phi)
+    phi = 2.0 ** steps * a * u
+    for n in range(steps - 1, -1, -1):
+        phi = 0.5 * (phi + math.asin(ratios[n] * math.sin(phi)))
+    return math.sin(phi), math.cos(phi)
 
 
+@njit(cache=True)
 def _sn_cn_first_order(u, mc):
-    """Return ``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2).
-
-    Each is accurate relative to its own size for |u| <= K/2.
-    """
-    sech, tanh = 1.0 / np.cosh(u), np.tanh(u)
-    correction = 0.25 * mc * (np.sinh(u) * np.cosh(u) - u) * sech
+    """``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2), each to its
+    relative accuracy for |u| <= K/2."""
+    sech, tanh = 1.0 / math.cosh(u), math.tanh(u)
+    correction = 0.25 * mc * (math.sinh(u) * math.cosh(u) - u) * sech
     return tanh + correction * sech, sech - correction * tanh
 
 
+@njit(cache=True)
 def _sn_cn_near_separatrix(v, mc, quarter):
-    """Return ``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX.
-
-    cn is accurate relative to its own size. Beyond K/2, ``sn(K - w) = cd(w)`` and
-    ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8) give cn as sqrt(mc) times a number of order one,
-    not as the cosine of an angle near pi/2.
+    """``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX, cn to its relative
+    accuracy. Beyond K/2, ``sn(K - w) = cd(w)`` and ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8)
+    give cn as sqrt(mc) times a number of order one, not as the cosine of an angle near pi/2.
     """
-    far = np.abs(v) > 0.5 * quarter
-    w = np.where(far, quarter - np.abs(v), np.abs(v))
-    tiny = mc < EXPANSION_MC
-    sn_w, cn_w = np.empty_like(w), np.empty_like(w)
-    sn_w[tiny], cn_w[tiny] = _sn_cn_first_order(w[tiny], mc[tiny])
-    sn_w[~tiny], cn_w[~tiny] = _sn_cn_complementary(w[~tiny], mc[~tiny])
-    dn_w = np.sqrt(cn_w * cn_w + mc * sn_w * sn_w)
-    sn = np.where(far, cn_w / dn_w, sn_w)
-    cn = np.where(far, np.sqrt(mc) * sn_w / dn_w, cn_w)
-    return np.sign(v) * sn, cn
+    far = abs(v) > 0.5 * quarter
+    w = quarter - abs(v) if far else abs(v)
+    if mc < EXPANSION_MC:
+        sn_w, cn_w = _sn_cn_first_order(w, mc)
+    else:
+        sn_w, cn_w = _sn_cn_complementary(w, mc)
+    dn_w = math.sqrt(cn_w * cn_w + mc * sn_w * sn_w)
+    if far:
+        return _sign(v) * cn_w / dn_w, math.sqrt(mc) * sn_w / dn_w
+    return _sign(v) * sn_w, cn_w
 
 
+@njit(cache=True)
 def _jacobi_sn_cn(v, k2, mc, quarter):
-    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``.
-
-    scipy's ``ellipj``, or from ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech
-    are exact).
-    """
-    sn, cn, _, _ = ellipj(v, k2)
-    near = (mc > 0.0) & (mc < NEAR_SEPARATRIX)
-    if near.any():   # rare: skip the ~40 numpy calls of an empty branch
-        sn[near], cn[near] = _sn_cn_near_separatrix(v[near], mc[near], quarter[near])
+    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``: scipy's ``ellipj``, or from
+    ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech are exact)."""
+    if 0.0 < mc < NEAR_SEPARATRIX:
+        return _sn_cn_near_separatrix(v, mc, quarter)
+    sn, cn, _ = ellipj(v, k2)
     return sn, cn
 
 
+@njit(cache=True)
 def shape_constants(i):
-    """``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments (N, 3)."""
-    i1, i2, i3 = i.T
-    return np.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1))), i3 * (i2 - i1) / (i1 * (i3 - i2))
+    """``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments (3-tuple)."""
+    i1, i2, i3 = i
+    return math.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1))), i3 * (i2 - i1) / (i1 * (i3 - i2))
 
 
+@njit(cache=True)
 def elliptic_working(i, m, time, ratio, nu):
-    """Advance m and build ``B0^T Rz(dpsi) B1`` (quaternion) in the working frame.
-
-    ``i`` (N, 3) working-frame moments, ``m`` (N, 3), ``time`` (N,), and ``ratio``, ``nu``
-    (N,) from :func:`shape_constants` of ``i``. Returns m (N, 3) and the quaternion (N, 4).
-    """
-    i1, i2, i3 = i.T
+    """Advance m (3-tuple) by ``time`` and build ``B0^T Rz(dpsi) B1`` (4-tuple) in the working
+    frame of moments ``i``, with ``ratio`` and ``nu`` from :func:`shape_constants`."""
     k2, mc, amp, rate = _invariants(i, m)
-    h = np.hypot(ratio * m[:, 1], m[:, 0])
-    s0 = np.where(h > 0.0, ratio * m[:, 1] / np.where(h > 0.0, h, 1.0), 0.0)
-    c0 = np.where(h > 0.0, m[:, 0] / np.where(h > 0.0, h, 1.0), 1.0)
+    h = math.hypot(ratio * m[1], m[0])
+    s0 = ratio * m[1] / h if h > 0.0 else 0.0
+    c0 = m[0] / h if h > 0.0 else 1.0
     dn0_2 = c0 * c0 + mc * s0 * s0
-    u0 = _first_kind(s0, c0, dn0_2)   # F(am0), |am0| <= pi/2
+    u0 = s0 * elliprf(c0 * c0, dn0_2, 1.0)   # F(am0), |am0| <= pi/2
     u1 = u0 + rate * time
     quarter = ellipkm1(mc)   # K, from mc directly (inf on the separatrix)
-    with np.errstate(invalid='ignore', divide='ignore'):
-        turns = np.where(np.isfinite(quarter), np.round(u1 / (2.0 * quarter)), 0.0)
-        shift = np.where(turns != 0.0, 2.0 * turns * quarter, 0.0)
-        sn, cn = _jacobi_sn_cn(u1 - shift, k2, mc, quarter)
-        dn2 = cn * cn + mc * sn * sn
-        # F(am v) = v for |v| <= K: the reduced argument is its own first-kind integral.
-        g1 = (2.0 * turns * _complete_pi_minus(nu, mc, turns)
-              + _pi_minus(nu, sn, cn, dn2, u1 - shift))
+    turns = np.rint(u1 / (2.0 * quarter)) if math.isfinite(quarter) else 0.0
+    shift = 2.0 * turns * quarter if turns != 0.0 else 0.0
+    v = u1 - shift
+    sn, cn = _jacobi_sn_cn(v, k2, mc, quarter)
+    dn2 = cn * cn + mc * sn * sn
+    complete = 0.0   # Pi(-nu | k^2): only a body passing a half period needs it
+    if turns != 0.0:
+        complete = elliprf(0.0, mc, 1.0) - nu / 3.0 * elliprj(0.0, mc, 1.0, 1.0 + nu)
+    # F(am v) = v for |v| <= K: the reduced argument is its own first-kind integral.
+    g1 = 2.0 * turns * complete + _pi_minus(nu, sn, cn, dn2, v)
     g0 = _pi_minus(nu, s0, c0, dn0_2, u0)
-    sign = 1.0 - 2.0 * np.mod(turns, 2.0)
-    m_new = np.stack((amp[:, 0] * sign * cn, amp[:, 1] * sign * sn,
-                      np.where(m[:, 2] < 0.0, -1.0, 1.0) * amp[:, 2] * np.sqrt(dn2)), axis=1)
-    big_l = np.linalg.norm(m, axis=1)
+    sign = 1.0 - 2.0 * (turns - 2.0 * math.floor(0.5 * turns))
+    m_new = (amp[0] * sign * cn, amp[1] * sign * sn,
+             (-1.0 if m[2] < 0.0 else 1.0) * amp[2] * math.sqrt(dn2))
+    big_l = math.sqrt(kin.dot(m, m))
+    i1, i3 = i[0], i[2]
     dpsi = big_l * time / i3 + big_l * (i3 - i1) / (i1 * i3 * rate) * (g1 - g0)
-    alpha0 = np.arctan2(s0, ratio * c0)
-    alpha1 = turns * np.pi + np.arctan2(sn, ratio * cn)
-    core = rotation.multiply(_zyz(alpha0, _polar(m), dpsi),
-                             rotation.conjugate(_zyz(alpha1, _polar(m_new), 0.0)))
+    alpha0 = math.atan2(s0, ratio * c0)
+    alpha1 = turns * math.pi + math.atan2(sn, ratio * cn)
+    core = kin.multiply(_zyz(alpha0, _polar(m), dpsi),
+                        kin.conjugate(_zyz(alpha1, _polar(m_new), 0.0)))
     return m_new, core
 
 
+@njit(cache=True)
 def _polar(m):
     """Angle between m and the working axis 3, in [0, pi]."""
-    return np.arctan2(np.hypot(m[:, 0], m[:, 1]), m[:, 2])
+    return math.atan2(math.hypot(m[0], m[1]), m[2])
 
 
+@njit(cache=True)
 def _zyz(a, b, c):
-    """Quaternions ``(x, y, z, w)`` of ``Rz(a) Ry(b) Rz(c)``, (N,) angles each."""
+    """Quaternion ``(x, y, z, w)`` of ``Rz(a) Ry(b) Rz(c)``."""
     half_b = 0.5 * b
     diff, total = 0.5 * (c - a), 0.5 * (a + c)
-    return np.stack((np.sin(half_b) * np.sin(diff), np.sin(half_b) * np.cos(diff),
-                     np.cos(half_b) * np.sin(total), np.cos(half_b) * np.cos(total)), axis=1)
+    return (math.sin(half_b) * math.sin(diff), math.sin(half_b) * math.cos(diff),
+            math.cos(half_b) * math.sin(total), math.cos(half_b) * math.cos(total))

@@ -1,5 +1,3 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
 """Exact torque-free motion of N rigid bodies (Jacobi elliptic functions, Carlson forms).
 
 Quaternions are scalar-last ``(x, y, z, w)`` and map principal body axes to world axes.
@@ -18,6 +16,8 @@ Every amplitude enters only through ratios that stay finite for a pure spin (``a
 
 Axisymmetric and spherical bodies (and a spin about the intermediate axis, an equilibrium)
 take the closed form ``R1 = R0 exp(m dt/I_perp) exp(e Omega dt)``; zero ``L`` is left alone.
+Each body is one compiled scalar computation (:func:`free_flow`), so the splitting kernels
+call it per body and one body's branch never costs another anything.
 
 Precision: the result is exact up to ~1e-15 relative per call times the phase
 ``|lambda| dt``. Near the separatrix the complementary parameter ``mc = 1 - k^2`` is computed
@@ -27,47 +27,18 @@ from ``L^2 - 2 E I2`` without cancellation and used for ``K``, ``u0`` and ``dn``
 ``eps / mc``, so this is the conditioning of the problem, not a loss of the method.
 No NaN is produced for ``mc -> 0`` (on the separatrix ``K = inf`` and no period is reduced).
 """
-import numpy as np
-from scipy.spatial.transform import Rotation
+import math
 
-from rigid_sim.core import rotation
+import numpy as np
+from numba import njit
+
+from rigid_sim.core import kinematics as kin
 from rigid_sim.core.integrators.elliptic_flow import (elliptic_working, separatrix_gap,
                                                       shape_constants)
 
 # Moments closer than this (relative) are treated as equal: a few ulps, where the closed form
 # errs by ~1e-14 of the angle turned; the elliptic form stays ~1e-12 accurate down to 1e-14 gaps.
 SYMMETRY_RTOL = 1e-14
-# Proper rotation (x, y, z) -> (z, y, -x): makes the minor axis the working axis 3.
-SWAP_MAJOR_MINOR = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
-# Half-turn about axis 3: makes m1 >= 0 so u0 = F(am0) needs no period (K may be infinite).
-HALF_TURN_Z = np.diag([-1.0, -1.0, 1.0])
-AXES = np.eye(3)
-# Entries of a signed permutation matrix, each in {-1, 0, 1}, read as a base-3 number (a key).
-_KEY_DIGITS = 3 ** np.arange(9)
-
-
-def _signed_permutation_quaternions():
-    """Table: key of each proper signed permutation matrix -> its quaternion (x, y, z, w).
-
-    The working frames are these 24 matrices only, so one lookup replaces a general (and,
-    per call, ~100x dearer) matrix-to-quaternion conversion.
-    """
-    permutations = np.array([np.eye(3)[list(p)] for p in np.ndindex(3, 3, 3)
-                             if len(set(p)) == 3])
-    signs = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T
-    frames = (permutations[:, None] * signs[None, :, :, None]).reshape(-1, 3, 3)
-    frames = frames[np.linalg.det(frames) > 0.0]
-    table = np.full((3 ** 9, 4), np.nan)
-    table[_frame_keys(frames)] = Rotation.from_matrix(frames).as_quat()
-    return table
-
-
-def _frame_keys(frames):
-    """Keys (N,) int of (N, 3, 3) signed permutation matrices."""
-    return (np.rint(frames.reshape(-1, 9)) + 1.0).astype(int) @ _KEY_DIGITS
-
-
-_FRAME_QUATERNIONS = _signed_permutation_quaternions()
 
 
 def torque_free_flow(moments, angular_momentum_body, orientation, dt):
@@ -90,140 +61,154 @@ def torque_free_flow(moments, angular_momentum_body, orientation, dt):
     orientation_new : (N, 4) float
         Unit quaternions, continuous in ``dt`` from ``orientation``.
     """
-    moments = np.asarray(moments, dtype=float)
-    m = np.asarray(angular_momentum_body, dtype=float)
-    q = np.asarray(orientation, dtype=float)
+    moments = np.ascontiguousarray(moments, dtype=float)
+    m = np.array(angular_momentum_body, dtype=float, order='C')
+    q = np.array(orientation, dtype=float, order='C')
     if moments.ndim != 2 or moments.shape[1] != 3 or m.shape != moments.shape:
         raise ValueError('moments and angular_momentum_body must both be (N, 3)')
     if q.shape != (len(m), 4):
         raise ValueError('orientation must be (N, 4) quaternions (x, y, z, w)')
     if np.any(moments <= 0.0):
         raise ValueError('principal moments must be positive')
-    return TorqueFreeFlow(moments)(m, q, dt)
+    _flow_all(moments, m, q, float(dt))
+    return m, q
 
 
-class TorqueFreeFlow:
-    """:func:`torque_free_flow` for bodies of fixed moments (N, 3), positive.
+@njit(cache=True)
+def _flow_all(moments, m, q, dt):
+    """:func:`free_flow` of every row of ``m`` (N, 3) and ``q`` (N, 4), in place."""
+    for i in range(m.shape[0]):
+        m_new, q_new = free_flow(kin.vector(moments, i, 0), kin.vector(m, i, 0),
+                                 kin.orientation_row(q, i), dt)
+        kin.store(m, i, 0, m_new)
+        kin.store(q, i, 0, q_new)
 
-    What depends on the moments alone (their order, symmetry, the working frames and their
-    quaternions, the elliptic shape constants) is computed once here, not in every step.
+
+@njit(cache=True)
+def _sorted_axes(i):
+    """Indices (3-tuple) that sort the moments ``i`` ascending, ties in their given order."""
+    a, b, c = 0, 1, 2
+    if i[b] < i[a]:
+        a, b = b, a
+    if i[c] < i[b]:
+        b, c = c, b
+        if i[b] < i[a]:
+            a, b = b, a
+    return a, b, c
+
+
+@njit(cache=True)
+def free_flow(moments, m, q, dt):
+    """Body-axes ``m`` (3-tuple) and unit ``q`` (4-tuple) after ``dt`` of torque-free motion.
+
+    ``moments`` (3-tuple) are principal moments, any order, positive. Scale-free:
+    flow(m, I, dt) == flow(m/a, I/b, dt a/b) scaled back, so nothing over- or underflows.
     """
-
-    def __init__(self, moments):
-        # Scale-free: flow(m, I, dt) == flow(m/a, I/b, dt a/b) scaled back; no over/underflow.
-        self._i_scale = np.max(moments, axis=1)
-        self._moments = moments / self._i_scale[:, None]
-        self._order = np.argsort(self._moments, axis=1)
-        s = np.take_along_axis(self._moments, self._order, axis=1)
-        self._sorted = s
-        self._equal_12 = s[:, 1] - s[:, 0] <= SYMMETRY_RTOL * s[:, 2]
-        self._equal_23 = s[:, 2] - s[:, 1] <= SYMMETRY_RTOL * s[:, 2]
-        self._symmetric = self._equal_12 | self._equal_23
-        self._working_frames(s)
-
-    def _working_frames(self, s):
-        """Tables over the four working frames of each body.
-
-        Major or minor axis 3, m1 flipped or not (index ``2 minor + flip``): frames, moments,
-        quaternions, constants.
-        """
-        major = AXES[self._order]
-        major[np.linalg.det(major) < 0.0, 0] *= -1.0
-        minor = SWAP_MAJOR_MINOR @ major
-        self._frames = np.stack((major, HALF_TURN_Z @ major, minor, HALF_TURN_Z @ minor))
-        self._quaternions = _FRAME_QUATERNIONS[_frame_keys(self._frames)].reshape(4, -1, 4)
-        self._working_moments = np.stack((s, s[:, ::-1]))
-        # Symmetric bodies divide 0 by 0 here; they take the closed form and never read it.
-        with np.errstate(invalid='ignore', divide='ignore'):
-            self._shape = np.array([shape_constants(i) for i in self._working_moments])
-
-    def __call__(self, m, q, dt):
-        """Return body-axes ``m`` (N, 3) and unit ``q`` (N, 4) ``dt`` after ``m``, ``q``."""
-        m_scale = np.max(np.abs(m), axis=1)
-        time = dt * m_scale / self._i_scale
-        moving = m_scale > 0.0
-        if moving.all():
-            symmetric = self._symmetric | self._saddle(m)
-            if not symmetric.any():   # every body elliptic: no masks, no gathers
-                m_next, step = self._asymmetric(slice(None), m / m_scale[:, None], time)
-                return m_next * m_scale[:, None], rotation.normalize(rotation.multiply(q, step))
-        return self._masked(m, q, m_scale, time, moving)
-
-    def _masked(self, m, q, m_scale, time, moving):
-        """Return the flow when some bodies are still, symmetric or spinning about axis 2."""
-        m_new, q_new = m.copy(), q.copy()
-        if np.any(moving):
-            safe = np.where(moving, m_scale, 1.0)[:, None]
-            m_unit = m / safe
-            step = np.zeros_like(q)
-            m_next = np.zeros_like(m)
-            symmetric, axis, i_axis, i_perp = self._classify(m_unit)
-            sym = moving & symmetric
-            ell = moving & ~symmetric
-            if np.any(sym):   # an empty branch would still cost its ~50 numpy calls
-                m_next[sym], step[sym] = _axisymmetric(
-                    axis[sym], i_axis[sym], i_perp[sym], m_unit[sym], time[sym])
-            if np.any(ell):
-                m_next[ell], step[ell] = self._asymmetric(ell, m_unit[ell], time[ell])
-            m_new[moving] = m_next[moving] * safe[moving]
-            q_new[moving] = rotation.multiply(q[moving], step[moving])
-        return m_new, rotation.normalize(q_new)
-
-    def _saddle(self, m):
-        """(N,) bool: m along the intermediate axis, an (unstable) equilibrium, a pure spin."""
-        m_sorted = np.take_along_axis(m, self._order, axis=1)
-        return (m_sorted[:, 0] ** 2 == 0.0) & (m_sorted[:, 2] ** 2 == 0.0)
-
-    def _classify(self, m):
-        """Which bodies take the closed form, and its symmetry axis, I_axis and I_perp.
-
-        Returns symmetric (N,) bool, axis (N, 3) unit body vector, i_axis (N,), i_perp (N,).
-        """
-        order, s, equal_12, equal_23 = self._order, self._sorted, self._equal_12, self._equal_23
-        saddle = self._saddle(m)
-        index = np.where(equal_23 & ~equal_12, order[:, 0], order[:, 2])
-        index = np.where(saddle & ~equal_12 & ~equal_23, order[:, 1], index)
-        i_axis = np.take_along_axis(self._moments, index[:, None], axis=1)[:, 0]
-        i_perp = np.where(equal_23, 0.5 * (s[:, 1] + s[:, 2]), 0.5 * (s[:, 0] + s[:, 1]))
-        i_perp = np.where(saddle & ~equal_12 & ~equal_23, s[:, 0], i_perp)
-        i_axis = np.where(equal_12 & equal_23, i_perp, i_axis)
-        return self._symmetric | saddle, AXES[index], i_axis, i_perp
-
-    def _asymmetric(self, bodies, m, time):
-        """Elliptic free motion of the asymmetric ``bodies`` (a slice or mask).
-
-        New m (K, 3) and body-frame rotation step (K, 4), from m (K, 3) in working units and time
-        (K,).
-        """
-        frames = self._frames[:, bodies]
-        each = np.arange(len(m))
-        # L^2 - 2 E I2 < 0: m circles the minor axis.
-        m_major = np.einsum('nij,nj->ni', frames[0], m)
-        minor = (separatrix_gap(self._working_moments[0, bodies], m_major) < 0.0).astype(int)
-        m_w = np.einsum('nij,nj->ni', frames[2 * minor, each], m)
-        variant = 2 * minor + (m_w[:, 0] < 0.0)
-        frame = frames[variant, each]
-        m_w = np.einsum('nij,nj->ni', frame, m)
-        ratio, nu = self._shape[:, :, bodies][minor, :, each].T
-        m_w_new, core = elliptic_working(self._working_moments[:, bodies][minor, each], m_w,
-                                         time, ratio, nu)
-        m_new = np.einsum('nji,nj->ni', frame, m_w_new)
-        p = self._quaternions[:, bodies][variant, each]
-        step = rotation.multiply(rotation.multiply(rotation.conjugate(p), core), p)
-        return m_new, step
+    i_scale = max(moments[0], max(moments[1], moments[2]))
+    mom = (moments[0] / i_scale, moments[1] / i_scale, moments[2] / i_scale)
+    m_scale = max(abs(m[0]), max(abs(m[1]), abs(m[2])))
+    if m_scale == 0.0:
+        return m, kin.normalize(q)
+    time = dt * m_scale / i_scale
+    unit = (m[0] / m_scale, m[1] / m_scale, m[2] / m_scale)
+    order = _sorted_axes(mom)
+    s = (mom[order[0]], mom[order[1]], mom[order[2]])
+    equal_12 = s[1] - s[0] <= SYMMETRY_RTOL * s[2]
+    equal_23 = s[2] - s[1] <= SYMMETRY_RTOL * s[2]
+    # m along the intermediate axis: an (unstable) equilibrium, a pure spin.
+    saddle = unit[order[0]] ** 2 == 0.0 and unit[order[2]] ** 2 == 0.0
+    if equal_12 or equal_23 or saddle:
+        m_next, step = _symmetric(mom, order, s, equal_12, equal_23, saddle, unit, time)
+    else:
+        m_next, step = _asymmetric(order, s, unit, time)
+    m_new = (m_next[0] * m_scale, m_next[1] * m_scale, m_next[2] * m_scale)
+    return m_new, kin.normalize(kin.multiply(q, step))
 
 
+@njit(cache=True)
+def _symmetric(mom, order, s, equal_12, equal_23, saddle, m, time):
+    """The closed form of a symmetric top, or of a spin about the intermediate axis."""
+    index = order[0] if equal_23 and not equal_12 else order[2]
+    i_perp = 0.5 * (s[1] + s[2]) if equal_23 else 0.5 * (s[0] + s[1])
+    if saddle and not equal_12 and not equal_23:
+        index, i_perp = order[1], s[0]
+    i_axis = i_perp if equal_12 and equal_23 else mom[index]
+    return _axisymmetric(_unit_axis(index), i_axis, i_perp, m, time)
+
+
+@njit(cache=True)
+def _unit_axis(index):
+    """Unit vector e_index, 3-tuple."""
+    return (1.0 if index == 0 else 0.0, 1.0 if index == 1 else 0.0, 1.0 if index == 2 else 0.0)
+
+
+@njit(cache=True)
 def _axisymmetric(axis, i_axis, i_perp, m, time):
-    """Closed-form free motion of symmetric tops: body rotation and new m (working units).
+    """Closed-form free motion of symmetric tops: new m and body rotation (working units).
 
     ``omega = m / I_perp + Omega e`` with ``Omega = (m.e)(1/I_axis - 1/I_perp)`` constant; the
     first part turns about the fixed world L, the second about the body axis, so
     ``R(t) = R0 exp(m0 t / I_perp) exp(e Omega t)`` and ``m(t) = Rot(e, -Omega t) m0``.
     """
-    spin = np.sum(m * axis, axis=1) * (1.0 / i_axis - 1.0 / i_perp)
-    angle = -(spin * time)[:, None]
-    m_new = (m * np.cos(angle) + np.cross(axis, m) * np.sin(angle)
-             + axis * np.sum(axis * m, axis=1, keepdims=True) * (1.0 - np.cos(angle)))
-    step = rotation.multiply(rotation.exp_map(m * (time / i_perp)[:, None]),
-                             rotation.exp_map(axis * (spin * time)[:, None]))
+    along = kin.dot(m, axis)
+    spin = along * (1.0 / i_axis - 1.0 / i_perp)
+    angle = -spin * time
+    cos, sin = math.cos(angle), math.sin(angle)
+    turned = kin.cross(axis, m)
+    m_new = (m[0] * cos + turned[0] * sin + axis[0] * along * (1.0 - cos),
+             m[1] * cos + turned[1] * sin + axis[1] * along * (1.0 - cos),
+             m[2] * cos + turned[2] * sin + axis[2] * along * (1.0 - cos))
+    scale = time / i_perp
+    step = kin.multiply(kin.exp_map((m[0] * scale, m[1] * scale, m[2] * scale)),
+                        kin.exp_map((axis[0] * spin * time, axis[1] * spin * time,
+                                     axis[2] * spin * time)))
     return m_new, step
+
+
+@njit(cache=True)
+def _working_frame(order, s, m):
+    """The working frame (9-tuple) of m and its moments: axis 3 the one m circles (major, or
+    minor below the separatrix), a proper signed permutation with ``m1 >= 0``."""
+    x, y, z = _unit_axis(order[0]), _unit_axis(order[1]), _unit_axis(order[2])
+    if kin.dot(x, kin.cross(y, z)) < 0.0:
+        x = (-x[0], -x[1], -x[2])
+    moments = s
+    if separatrix_gap(s, (kin.dot(x, m), kin.dot(y, m), kin.dot(z, m))) < 0.0:
+        # (x, y, z) -> (z, y, -x): a proper rotation making the minor axis the working axis 3.
+        x, z = z, (-x[0], -x[1], -x[2])
+        moments = (s[2], s[1], s[0])
+    if kin.dot(x, m) < 0.0:   # a half-turn about axis 3: then u0 = F(am0) needs no period
+        x, y = (-x[0], -x[1], -x[2]), (-y[0], -y[1], -y[2])
+    return (x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]), moments
+
+
+@njit(cache=True)
+def _matrix_quaternion(r):
+    """Quaternion (x, y, z, w) of a rotation matrix 9-tuple (Shepperd's method)."""
+    trace = r[0] + r[4] + r[8]
+    if trace >= max(r[0], max(r[4], r[8])):
+        w = 0.5 * math.sqrt(1.0 + trace)
+        return ((r[7] - r[5]) / (4.0 * w), (r[2] - r[6]) / (4.0 * w),
+                (r[3] - r[1]) / (4.0 * w), w)
+    if r[0] >= r[4] and r[0] >= r[8]:
+        x = 0.5 * math.sqrt(1.0 + r[0] - r[4] - r[8])
+        return (x, (r[1] + r[3]) / (4.0 * x), (r[2] + r[6]) / (4.0 * x),
+                (r[7] - r[5]) / (4.0 * x))
+    if r[4] >= r[8]:
+        y = 0.5 * math.sqrt(1.0 + r[4] - r[0] - r[8])
+        return ((r[1] + r[3]) / (4.0 * y), y, (r[5] + r[7]) / (4.0 * y),
+                (r[2] - r[6]) / (4.0 * y))
+    z = 0.5 * math.sqrt(1.0 + r[8] - r[0] - r[4])
+    return ((r[2] + r[6]) / (4.0 * z), (r[5] + r[7]) / (4.0 * z), z, (r[3] - r[1]) / (4.0 * z))
+
+
+@njit(cache=True)
+def _asymmetric(order, s, m, time):
+    """Elliptic free motion of an asymmetric body: new m and body-frame rotation step, from
+    m in working units and the scaled time."""
+    frame, moments = _working_frame(order, s, m)
+    ratio, nu = shape_constants(moments)
+    m_working, core = elliptic_working(moments, kin.rotate(frame, m), time, ratio, nu)
+    p = _matrix_quaternion(frame)
+    return (kin.rotate_inverse(frame, m_working),
+            kin.multiply(kin.multiply(kin.conjugate(p), core), p))

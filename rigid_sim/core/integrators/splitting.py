@@ -1,5 +1,3 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
 """Splitting methods: kick the momenta with the wrench, drift with the free motion.
 
 One Strang step of ``h`` is
@@ -20,68 +18,157 @@ over the kick, which one evaluation integrates exactly. A damper makes the kick 
 its own; one explicit step would cut the whole method to first order, so the kick is then
 integrated by an explicit Runge-Kutta method of the splitting's own order.
 """
-import numpy as np
-from scipy.spatial.transform import Rotation
+import math
 
-from rigid_sim.core import rotation
+import numpy as np
+from numba import njit
+
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core import safeguards
+from rigid_sim.core.dispatch import CompiledCall
+from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.free_rotation import TorqueFreeFlow
+from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import CLASSICAL_RK4, EXPLICIT_MIDPOINT
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
 
 # Yoshida (1990) weights: w1 + w0 + w1 = 1 and w1^3 + w0^3 + w1^3 = 0 cancel the h^3 error.
 YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
-# Unit vectors e_1, e_2, e_3 as (3, 1) columns that broadcast over N bodies.
-AXIS_ROWS = np.eye(3)[:, :, None]
-MOMENTA = slice(LINEAR_MOMENTUM.start, ANGULAR_MOMENTUM.stop)   # rows of [P, L], as [F, tau]
+DLM_DRIFT, EXACT_DRIFT = 0, 1   # which free rotation a kernel drifts with
 
 
-def dlm_rotation(moments, body_l, orientation, h):
+@njit(cache=True)
+def _dlm_axis(momentum, q, axis, theta):
+    """``L_b`` turned by ``-theta`` and ``q`` by ``+theta`` about principal axis ``axis``."""
+    cos, sin = math.cos(theta), math.sin(theta)
+    half_cos, half_sin = math.cos(0.5 * theta), math.sin(0.5 * theta)
+    # q <- q (sin(theta/2) e, cos(theta/2)) = cos q + sin q (e, 0).
+    e = (half_sin if axis == 0 else 0.0, half_sin if axis == 1 else 0.0,
+         half_sin if axis == 2 else 0.0, 0.0)
+    turned = kin.multiply(q, e)
+    q = (q[0] * half_cos + turned[0], q[1] * half_cos + turned[1],
+         q[2] * half_cos + turned[2], q[3] * half_cos + turned[3])
+    # A plane rotation of the two other components of L_b.
+    m = momentum
+    if axis == 0:
+        return (m[0], m[1] * cos + m[2] * sin, m[2] * cos - m[1] * sin), q
+    if axis == 1:
+        return (m[0] * cos - m[2] * sin, m[1], m[2] * cos + m[0] * sin), q
+    return (m[0] * cos + m[1] * sin, m[1] * cos - m[0] * sin, m[2]), q
+
+
+@njit(cache=True)
+def dlm_rotation(moments, momentum, q, h):
     """Free rotation for ``h`` as rotations about principal axes 1, 2, 3, 2, 1 (DLM 1997).
 
     Each sub-flow keeps ``T_i = L_i^2 / 2 I_i``: ``L_b`` turns by ``-theta`` and ``q`` by
     ``+theta`` about axis i, ``theta = L_i t / I_i``. Symmetric composition: order 2.
-
-    Parameters
-    ----------
-    moments : (N, 3) float
-        Principal moments, kg m^2.
-    body_l : (N, 3) float
-        Angular momentum in principal axes, kg m^2/s.
-    orientation : (N, 4) float
-        Quaternions (x, y, z, w), principal axes to world.
-    h : float
-        Step, s.
-
-    Returns
-    -------
-    body_l : (N, 3) float
-        Angular momentum in principal axes after ``h``.
-    orientation : (N, 4) float
-        Orientation after ``h``.
+    ``moments``, ``momentum`` 3-tuples (principal axes), ``q`` 4-tuple principal axes to
+    world.
     """
-    body_l, orientation = dlm_rotation_rows(np.asarray(moments).T, np.array(body_l).T,
-                                            np.array(orientation).T, h)
-    return body_l.T, orientation.T
-
-
-def dlm_rotation_rows(moments, body_l, orientation, h):
-    """:func:`dlm_rotation` on component-major rows, (3, N), (3, N), (4, N), in place."""
     for axis, fraction in ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5)):
-        theta = (fraction * h) * body_l[axis] / moments[axis]
-        after, before = (axis + 1) % 3, (axis + 2) % 3
-        # L_b turns by -theta about the axis: a plane rotation of the other two components.
-        cos, sin = np.cos(theta), np.sin(theta)
-        l_after = body_l[after] * cos + body_l[before] * sin
-        body_l[before] = body_l[before] * cos - body_l[after] * sin
-        body_l[after] = l_after
-        # q <- q (sin(theta/2) e, cos(theta/2)) = cos q + sin q (e, 0).
-        half = 0.5 * theta
-        turned = rotation.times_pure_rows(orientation, AXIS_ROWS[axis] * np.sin(half))
-        orientation *= np.cos(half)
-        orientation += turned
-    return body_l, orientation
+        momentum, q = _dlm_axis(momentum, q, axis,
+                                (fraction * h) * momentum[axis] / moments[axis])
+    return momentum, q
+
+
+@njit(cache=True)
+def _drift(y, model, h, drift):
+    """Free motion for ``h``: straight-line translation and torque-free rotation, in place."""
+    for i in range(y.shape[0]):
+        for k in range(3):
+            y[i, k] += y[i, 7 + k] * (h * model.inverse_mass[i])
+        principal = kin.orientation_row(model.principal, i)
+        # Bodies whose frames are already principal skip two quaternion products.
+        identity = principal == (0.0, 0.0, 0.0, 1.0)
+        q = kin.orientation(y, i)
+        if not identity:
+            q = kin.multiply(q, principal)
+        momentum = kin.rotate_inverse(kin.matrix(q), kin.vector(y, i, 10))
+        moments = kin.vector(model.moments, i, 0)
+        if drift == EXACT_DRIFT:
+            momentum, q = free_flow(moments, momentum, q, h)
+        else:
+            momentum, q = dlm_rotation(moments, momentum, q, h)
+        kin.store(y, i, 10, kin.rotate(kin.matrix(q), momentum))
+        if not identity:
+            q = kin.multiply(q, kin.conjugate(principal))
+        kin.store(y, i, 3, q)
+
+
+@njit(cache=True)
+def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
+    """Momenta after ``h`` of the wrench at fixed x and q, in place."""
+    start, slopes, force, torque = work
+    if not velocity_dependent:
+        accumulate(effects, y, time, model, force, torque)
+        for i in range(y.shape[0]):
+            for k in range(3):
+                y[i, 7 + k] += h * force[i, k]
+                y[i, 10 + k] += h * torque[i, k]
+        return
+    n = y.shape[0]
+    start[:, :] = y[:, 7:13]
+    for stage in range(b.size):
+        for i in range(n):
+            for j in range(6):
+                value = start[i, j]
+                for s in range(stage):
+                    if a[stage, s] != 0.0:
+                        value += h * a[stage, s] * slopes[s, i, j]
+                y[i, 7 + j] = value
+        accumulate(effects, y, time, model, force, torque)
+        slopes[stage, :, 0:3] = force
+        slopes[stage, :, 3:6] = torque
+    for i in range(n):
+        for j in range(6):
+            value = start[i, j]
+            for s in range(b.size):
+                value += h * b[s] * slopes[s, i, j]
+            y[i, 7 + j] = value
+
+
+@njit(cache=True)
+def _strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
+                        a, b, drift):
+    """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
+
+    Adjacent half kicks of consecutive sub-steps act at the same state and time, so they
+    merge: a composition of k Strang steps costs k + 1 kicks.
+    """
+    for k in range(substeps):
+        t = time + k * h
+        kick = 0.5 * weights[0]
+        for j in range(weights.size):
+            _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
+            _drift(y, model, weights[j] * h, drift)
+            t += weights[j] * h
+            following = weights[j + 1] if j + 1 < weights.size else 0.0
+            kick = 0.5 * (weights[j] + following)
+        _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
+        for i in range(y.shape[0]):
+            kin.store(y, i, 3, kin.normalize(kin.orientation(y, i)))
+        code = kin.check_substep(y)
+        if code != 0:
+            return code * (k + 1)
+    return 0
+
+
+# One kernel per drift, the choice a constant inside, so the per-body branch compiles away.
+@njit(cache=True)
+def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
+                         velocity_dependent, a, b):
+    """:func:`_strang_composition` drifting with the exact free flow."""
+    return _strang_composition(y, work, model, effects, time, h, substeps, weights,
+                               velocity_dependent, a, b, EXACT_DRIFT)
+
+
+@njit(cache=True)
+def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_dependent, a,
+                  b):
+    """:func:`_strang_composition` drifting with the DLM rotations."""
+    return _strang_composition(y, work, model, effects, time, h, substeps, weights,
+                               velocity_dependent, a, b, DLM_DRIFT)
 
 
 class StrangSplitting(Integrator):
@@ -90,66 +177,26 @@ class StrangSplitting(Integrator):
     order = 2
     weights = (1.0,)   # sub-step fractions; the Yoshida variants use three
     kick_tableau = EXPLICIT_MIDPOINT  # for momentum-dependent kicks, of the method's order
+    drift = DLM_DRIFT
 
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)
-        moments, body_from_principal = self.bodies.principal_moments
-        self._moments = moments
-        self._moment_rows = np.ascontiguousarray(moments.T)
-        self._principal = Rotation.from_matrix(body_from_principal).as_quat().T.copy()
-        self._principal_inverse = self._principal * np.array([[-1.0], [-1.0], [-1.0], [1.0]])
-        # Bodies whose frames are already principal (diagonal inertia, sorted) skip two
-        # quaternion products per drift; multiplying by the identity would change no bit.
-        self._principal_is_body = bool(np.all(self._principal == np.array([[0.0], [0.0], [0.0],
-                                                                           [1.0]])))
+        count = self.bodies.count
+        self._weights = np.array(self.weights, dtype=float)
+        a, b, _ = self.kick_tableau.arrays()
+        self._kick_tableau = (a, b)
+        kicks = len(self.weights) + 1
+        self.evaluations_per_step = kicks * (b.size if system.velocity_dependent else 1)
+        self._work = (np.empty((count, 6)), np.empty((b.size, count, 6)), self._force,
+                      self._torque)
+        self._kernel = CompiledCall(exact_flow_splitting if self.drift == EXACT_DRIFT
+                                    else dlm_splitting)
 
-    def _step_impl(self, rows, time, dt):
-        # Adjacent half kicks of consecutive sub-steps act at the same state and time, so
-        # they merge: a composition of k Strang steps costs k + 1 wrench evaluations.
-        rows = np.array(rows, order='C')
-        kick = 0.5 * self.weights[0]
-        following = self.weights[1:] + (0.0,)
-        for weight, next_weight in zip(self.weights, following):
-            self._kick(rows, time, kick * dt)
-            self._drift(rows, weight * dt)
-            time += weight * dt
-            kick = 0.5 * (weight + next_weight)
-        self._kick(rows, time, kick * dt)
-        return rows
-
-    def _kick(self, rows, time, h):
-        """Momenta after ``h`` of the wrench at fixed x and q, in place."""
-        if not self.system.velocity_dependent:
-            self.wrench_rows(rows, time)
-            rows[MOMENTA] += h * self._wrench
-            return
-        start = rows[MOMENTA].copy()
-        tableau = self.kick_tableau
-        slopes = np.empty((len(tableau.b),) + start.shape)
-        for stage, row in enumerate(tableau.a):
-            rows[MOMENTA] = start + sum(h * w * s for w, s in zip(row, slopes) if w)
-            self.wrench_rows(rows, time)
-            slopes[stage] = self._wrench
-        rows[MOMENTA] = start + np.einsum('s,sin->in', h * np.asarray(tableau.b), slopes)
-
-    def _drift(self, rows, h):
-        """Free motion for ``h``: straight-line translation and torque-free rotation."""
-        rows[POSITION] += rows[LINEAR_MOMENTUM] * (h * self.bodies.inverse_mass)
-        principal_q = rows[ORIENTATION]
-        if not self._principal_is_body:
-            principal_q = rotation.multiply_rows(principal_q, self._principal)
-        matrices = rotation.matrix_rows(principal_q)
-        principal_l = rotation.rotate_inverse_rows(matrices, rows[ANGULAR_MOMENTUM])
-        principal_l, principal_q = self._free_rotation_rows(principal_l, principal_q, h)
-        rotation.rotate_rows(rotation.matrix_rows(principal_q), principal_l,
-                             out=rows[ANGULAR_MOMENTUM])
-        if not self._principal_is_body:
-            principal_q = rotation.multiply_rows(principal_q, self._principal_inverse)
-        rows[ORIENTATION] = principal_q
-
-    def _free_rotation_rows(self, principal_l, principal_q, h):
-        """Torque-free rotation of rows (3, N) and (4, N) for ``h``."""
-        raise NotImplementedError
+    def _advance(self, y, time, h, substeps):
+        a, b = self._kick_tableau
+        return self._kernel(y, self._work, self.bodies.model, self.system.effect_parameters(),
+                            time, h, substeps, self._weights, self.system.velocity_dependent,
+                            a, b)
 
 
 class DLM(StrangSplitting):
@@ -160,9 +207,7 @@ class DLM(StrangSplitting):
     """
 
     name = 'dlm'
-
-    def _free_rotation_rows(self, principal_l, principal_q, h):
-        return dlm_rotation_rows(self._moment_rows, principal_l, principal_q, h)
+    bound = safeguards.STRANG_ACCURACY_ALL
 
 
 class DLM4(DLM):
@@ -175,6 +220,7 @@ class DLM4(DLM):
     order = 4
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
+    bound = safeguards.YOSHIDA_ACCURACY_ALL
 
 
 class ExactSplit(StrangSplitting):
@@ -186,14 +232,8 @@ class ExactSplit(StrangSplitting):
     """
 
     name = 'exact_split'
-
-    def __init__(self, system, tolerance=1e-6):
-        super().__init__(system, tolerance)
-        self._flow = TorqueFreeFlow(self._moments)
-
-    def _free_rotation_rows(self, principal_l, principal_q, h):
-        principal_l, principal_q = self._flow(principal_l.T, principal_q.T, h)
-        return principal_l.T, principal_q.T
+    drift = EXACT_DRIFT
+    bound = safeguards.STRANG_ACCURACY
 
 
 class ExactSplit4(ExactSplit):
@@ -203,3 +243,4 @@ class ExactSplit4(ExactSplit):
     order = 4
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
+    bound = safeguards.YOSHIDA_ACCURACY

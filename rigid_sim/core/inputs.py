@@ -1,6 +1,5 @@
-# Copyright 2026 rigid_sim maintainers
-# SPDX-License-Identifier: Apache-2.0
-"""Wrenches applied from outside (user commands), held until replaced or timed out.
+"""Inputs of a world: wrenches applied from outside (user commands), held until replaced or
+timed out. They are not an effect of the scene: the world always has them (``world.inputs``).
 
 Each held wrench has a body, a key (the ROS frame_id it came with: a new wrench with the
 same body and key replaces it) and one of four ways to act:
@@ -12,19 +11,21 @@ same body and key replaces it) and one of four ways to act:
 keeps its direction while the body turns under it).
 
 A body-axes force ``f`` at body point ``p`` gives the body-axes torque ``(p - c) x f`` about
-the centre of mass ``c``, so every held wrench folds into four (N, 3) sums (world force and
-torque, body force and torque) rebuilt only when the holdings change; a stage then costs
-two rotations whatever the number of wrenches.
+the centre of mass ``c``, so every held wrench folds into two (N, 6) sums (world and body
+axes, force then torque) rebuilt only for the body whose holdings change; a stage then costs
+one rotation per body holding a body-axes wrench, whatever the number of wrenches.
 """
 import heapq
 import itertools
 import math
-from collections import Counter
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-from rigid_sim.core import rotation
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.effects.base import kernel_for
 
 FRAMES = ('world', 'body', 'point', 'world_point')
 DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
@@ -45,6 +46,17 @@ class HeldWrench:
     expires: float       # simulated time at which it stops acting (inf: held until replaced)
 
 
+class WrenchInputs(NamedTuple):
+    """The held wrenches as arrays, what the compiled kernel reads."""
+
+    world_sum: np.ndarray    # (N, 6) world-axes force (N) and torque (N m) per body
+    body_sum: np.ndarray     # (N, 6) body-axes force and torque per body
+    body_held: np.ndarray    # (N,) bool: the body holds a body-axes wrench
+    point_body: np.ndarray   # (K,) int, body of each world_point force
+    point_lever: np.ndarray  # (K, 3) m, body axes, from its centre of mass to the point
+    point_force: np.ndarray  # (K, 3) N, world axes
+
+
 class AppliedWrenches:
     """The wrenches currently held on the bodies of a scene.
 
@@ -61,20 +73,20 @@ class AppliedWrenches:
         # {body: {key: HeldWrench}}, and the world_point ones again under (body, key).
         self._by_body = {}
         self._at_points = {}
-        # Held sums as rows (2, 3, N): [force, torque], component-major like the integrators.
-        self._sums = {'world': np.zeros((2, 3, count)), 'body': np.zeros((2, 3, count))}
+        self._sums = {'world': np.zeros((count, 6)), 'body': np.zeros((count, 6))}
+        self._body_held = np.zeros(count, dtype=bool)
         # (N,) bool: the bodies holding a wrench now (the step guard reads it every step).
         self.held_mask = np.zeros(count, dtype=bool)
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
-        self.velocity_dependent = False
-        # Held wrenches per frame, and a heap of (expires, order, body, key, wrench): a hold
-        # that changes or ends costs O(log n), not a walk over all n held wrenches.
-        self._frame_counts = Counter()
+        # A heap of (expires, order, body, key, wrench): a hold that changes or ends costs
+        # O(log n), not a walk over all n held wrenches.
         self._expiries = []
         self._order = itertools.count()
-        self._stale = True
         self._points_stale = True
+        self._refresh()
+        # Counts every change of the holdings: the step guard's cached spin is of one version.
+        self.version = 0
 
     def check(self, force, torque):
         """Finite (3,) force and torque within the limits, or ValueError saying why."""
@@ -117,7 +129,6 @@ class AppliedWrenches:
         if key in self._by_body.get(body, {}):
             self._take(body, key)
         self._by_body.setdefault(body, {})[key] = held
-        self._frame_counts[frame] += 1
         if frame == 'world_point':
             self._at_points[(body, key)] = held
             self._points_stale = True
@@ -131,7 +142,6 @@ class AppliedWrenches:
             dropped = list(self._by_body)
             self._by_body.clear()
             self._at_points.clear()
-            self._frame_counts.clear()
             self._expiries.clear()
             self._points_stale = True
         else:
@@ -157,7 +167,6 @@ class AppliedWrenches:
     def _take(self, body, key):
         """Remove the wrench held on ``body`` under ``key`` (the sums are left to _resum)."""
         held = self._by_body[body].pop(key)
-        self._frame_counts[held.frame] -= 1
         if held.frame == 'world_point':
             del self._at_points[(body, key)]
             self._points_stale = True
@@ -166,27 +175,33 @@ class AppliedWrenches:
         """Re-add the wrenches held on ``body`` into the sums, in the order they came."""
         wrenches = self._by_body.get(body)
         for sums in self._sums.values():
-            sums[:, :, body] = 0.0
+            sums[body] = 0.0
         for held in (wrenches or {}).values():
             sums = self._sums['body' if held.frame == 'body' else 'world']
-            sums[:, :, body] += (held.force, held.torque)
+            sums[body, :3] += held.force
+            sums[body, 3:] += held.torque
         if not wrenches:
             self._by_body.pop(body, None)
         self.held_mask[body] = bool(wrenches)
-        self._stale = True
+        self.version += 1
+        self._body_held[body] = any(held.frame == 'body' for held in (wrenches or {}).values())
 
     def _refresh(self):
-        """Which sums are in use and the world_point arrays, after the holdings changed."""
-        counts = self._frame_counts
-        self._any_world = counts['world'] + counts['world_point'] > 0
-        self._any_body = counts['body'] > 0
+        """The kernel's arrays after the world_point holdings changed (the sums stay)."""
+        at_points = list(self._at_points.values())
+        self._parameters = WrenchInputs(
+            self._sums['world'], self._sums['body'], self._body_held,
+            np.array([w.body for w in at_points], dtype=np.int64),
+            np.array([w.lever for w in at_points], dtype=float).reshape(-1, 3),
+            np.array([w.force for w in at_points], dtype=float).reshape(-1, 3))
+        self._points_stale = False
+
+    @property
+    def parameters(self):
+        """The :class:`WrenchInputs` the compiled kernel reads."""
         if self._points_stale:
-            at_points = list(self._at_points.values())
-            self._point_body = np.array([w.body for w in at_points], dtype=int)
-            self._point_lever = np.array([w.lever for w in at_points]).reshape(-1, 3).T.copy()
-            self._point_force = np.array([w.force for w in at_points]).reshape(-1, 3).T.copy()
-            self._points_stale = False
-        self._stale = False
+            self._refresh()
+        return self._parameters
 
     @property
     def held(self):
@@ -194,23 +209,25 @@ class AppliedWrenches:
         return {(body, key): w for body, wrenches in self._by_body.items()
                 for key, w in wrenches.items()}
 
-    def accumulate(self, snapshot, force, torque):
-        if self._stale:
-            self._refresh()
-        # Skipping empty sums changes no number: it only spares the idle case its cost.
-        if self._any_body:
-            turned = snapshot.to_world(self._sums['body'])
-            force += turned[0].T
-            torque += turned[1].T
-        if self._any_world:
-            world = self._sums['world']
-            force += world[0].T
-            torque += world[1].T
-        if self._point_body.size:
-            lever = rotation.rotate_rows(snapshot.rotation_rows[:, :, self._point_body],
-                                         self._point_lever)
-            moment = rotation.cross_rows(lever, self._point_force)
-            np.add.at(torque, self._point_body, moment.T)
 
-    def potential_energy(self, snapshot):
-        return 0.0
+@kernel_for(WrenchInputs)
+@njit(cache=True)
+def wrench_input(p, y, time, model, force, torque):
+    """Add the held wrenches to ``force`` and ``torque`` (N, 3) at the packed state ``y``."""
+    for i in range(y.shape[0]):
+        for k in range(3):
+            force[i, k] += p.world_sum[i, k]
+            torque[i, k] += p.world_sum[i, 3 + k]
+        if p.body_held[i]:
+            r = kin.matrix(kin.orientation(y, i))
+            kin_force = kin.rotate(r, kin.vector(p.body_sum, i, 0))
+            kin_torque = kin.rotate(r, kin.vector(p.body_sum, i, 3))
+            for k in range(3):
+                force[i, k] += kin_force[k]
+                torque[i, k] += kin_torque[k]
+    for j in range(p.point_body.size):
+        i = p.point_body[j]
+        arm = kin.rotate(kin.matrix(kin.orientation(y, i)), kin.vector(p.point_lever, j, 0))
+        moment = kin.cross(arm, kin.vector(p.point_force, j, 0))
+        for k in range(3):
+            torque[i, k] += moment[k]

@@ -1,0 +1,174 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Compiled per-body kinematics: scalar 3-vectors, 3x3 matrices and quaternions as tuples.
+
+The compiled kernels loop over bodies and do their math on tuples of floats, which numba
+keeps in registers: a rotation matrix is the 9-tuple ``(r00, r01, ..., r22)`` (row-major,
+``v_world = R v_body``), a quaternion the 4-tuple ``(x, y, z, w)``. The packed state row of a
+body is ``[x, q, P, L]`` (see :mod:`rigid_sim.core.state`).
+"""
+import math
+
+from numba import njit
+
+# Integrators return unit quaternions. One off by more than this overflowed before it was
+# normalised (to zeros: finite, but no rotation at all), and it is treated like a NaN.
+UNIT_QUATERNION_SLACK = 1e-6
+
+
+@njit(cache=True)
+def matrix(q):
+    """``R`` (9-tuple, row-major) of the quaternion ``q`` (x, y, z, w), Shoemake's formula.
+
+    Exact for unit ``q``; integrator stages pass slightly non-unit ones, as RK stages are.
+    """
+    x, y, z, w = q
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+            2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+            2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y))
+
+
+@njit(cache=True)
+def rotate(r, v):
+    """``R v`` for a 9-tuple ``R`` and a 3-tuple ``v``."""
+    return (r[0] * v[0] + r[1] * v[1] + r[2] * v[2],
+            r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+            r[6] * v[0] + r[7] * v[1] + r[8] * v[2])
+
+
+@njit(cache=True)
+def rotate_inverse(r, v):
+    """``R^T v`` for a 9-tuple ``R`` and a 3-tuple ``v``."""
+    return (r[0] * v[0] + r[3] * v[1] + r[6] * v[2],
+            r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
+            r[2] * v[0] + r[5] * v[1] + r[8] * v[2])
+
+
+@njit(cache=True)
+def apply(m, v):
+    """``M v`` for a (3, 3) array ``M`` and a 3-tuple ``v``."""
+    return (m[0, 0] * v[0] + m[0, 1] * v[1] + m[0, 2] * v[2],
+            m[1, 0] * v[0] + m[1, 1] * v[1] + m[1, 2] * v[2],
+            m[2, 0] * v[0] + m[2, 1] * v[1] + m[2, 2] * v[2])
+
+
+@njit(cache=True)
+def cross(u, v):
+    """``u x v`` of 3-tuples."""
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+@njit(cache=True)
+def dot(u, v):
+    """``u . v`` of 3-tuples."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@njit(cache=True)
+def multiply(p, q):
+    """Hamilton product ``p q`` of 4-tuples (x, y, z, w)."""
+    return (p[3] * q[0] + q[3] * p[0] + p[1] * q[2] - p[2] * q[1],
+            p[3] * q[1] + q[3] * p[1] + p[2] * q[0] - p[0] * q[2],
+            p[3] * q[2] + q[3] * p[2] + p[0] * q[1] - p[1] * q[0],
+            p[3] * q[3] - p[0] * q[0] - p[1] * q[1] - p[2] * q[2])
+
+
+@njit(cache=True)
+def conjugate(q):
+    """Inverse of a unit quaternion 4-tuple."""
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+@njit(cache=True)
+def normalize(q):
+    """``q / |q|`` of a 4-tuple."""
+    scale = 1.0 / math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return (q[0] * scale, q[1] * scale, q[2] * scale, q[3] * scale)
+
+
+@njit(cache=True)
+def exp_map(v):
+    """Unit quaternion of the rotation vector ``v`` (axis times angle, rad)."""
+    angle = math.sqrt(dot(v, v))
+    half = 0.5 * angle
+    # sin(a/2) / a without a branch cut at zero: its series to the round-off of the angle.
+    factor = 0.5 - angle * angle / 48.0 if angle < 1e-4 else math.sin(half) / angle
+    return (v[0] * factor, v[1] * factor, v[2] * factor, math.cos(half))
+
+
+@njit(cache=True)
+def orientation(y, i):
+    """Quaternion 4-tuple of body ``i`` in the packed state ``y`` (N, 13)."""
+    return (y[i, 3], y[i, 4], y[i, 5], y[i, 6])
+
+
+@njit(cache=True)
+def vector(a, i, start):
+    """3-tuple ``a[i, start:start + 3]``."""
+    return (a[i, start], a[i, start + 1], a[i, start + 2])
+
+
+@njit(cache=True)
+def store(a, i, start, v):
+    """``a[i, start:start + len(v)] = v`` for a tuple ``v``."""
+    for k in range(len(v)):
+        a[i, start + k] = v[k]
+
+
+@njit(cache=True)
+def angular_velocity(r, inertia_inv, angular_momentum):
+    """``omega = R I_body^-1 R^T L``, world axes, rad/s: the one place it is defined.
+
+    Parameters
+    ----------
+    r : 9-tuple, ``R`` body to world
+    inertia_inv : (3, 3) float, ``I_body^-1``, 1/(kg m^2)
+    angular_momentum : 3-tuple, world ``L``, kg m^2/s
+    """
+    return rotate(r, apply(inertia_inv, rotate_inverse(r, angular_momentum)))
+
+
+@njit(cache=True)
+def angular_velocities(y, inertia_inv, out):
+    """``omega`` (N, 3) of every body of the packed state ``y`` (N, 13) into ``out``."""
+    for i in range(y.shape[0]):
+        r = matrix(orientation(y, i))
+        store(out, i, 0, angular_velocity(r, inertia_inv[i], vector(y, i, 10)))
+    return out
+
+
+@njit(cache=True)
+def check_substep(y):
+    """0 if ``y`` (N, 13) is finite with unit quaternions, 1 if non-finite, -1 if a quaternion
+    is not unit (it overflowed before it was normalised)."""
+    for i in range(y.shape[0]):
+        for k in range(13):
+            if not math.isfinite(y[i, k]):
+                return 1
+        q = orientation(y, i)
+        if abs(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - 1.0) \
+                > UNIT_QUATERNION_SLACK:
+            return -1
+    return 0
+
+
+@njit(cache=True)
+def largest_spin(y, inertia_inv, covered, held, everyone):
+    """Largest ``|omega|``, rad/s, over the bodies ``everyone`` or ``covered | held`` selects.
+
+    ``covered`` and ``held`` are (N,) bool: bodies always torqued, and those holding a
+    wrench now.
+    """
+    largest = 0.0
+    for i in range(y.shape[0]):
+        if everyone or covered[i] or held[i]:
+            r = matrix(orientation(y, i))
+            body = apply(inertia_inv[i], rotate_inverse(r, vector(y, i, 10)))
+            largest = max(largest, dot(body, body))
+    return math.sqrt(largest)
+
+
+@njit(cache=True)
+def orientation_row(q, i):
+    """4-tuple ``q[i, 0:4]`` of an (N, 4) quaternion array."""
+    return (q[i, 0], q[i, 1], q[i, 2], q[i, 3])

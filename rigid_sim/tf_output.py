@@ -1,0 +1,49 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""/tf and /tf_static, where tf2_msgs is installed.
+
+tf2_msgs comes with every ROS install but has no wheel for a pip-only machine, so it is
+imported optionally: without it the node logs once that tf is off and publishes the same
+poses on its other topics. The transforms themselves are geometry_msgs/TransformStamped,
+built in :mod:`rigid_sim.conversions`; only their wrapping into a TFMessage lives here.
+"""
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+try:
+    from tf2_msgs.msg import TFMessage
+except ImportError:
+    TFMessage = None
+
+# As tf2_ros's broadcasters: /tf keeps 100, /tf_static keeps its one latest message for
+# listeners that join later (transient local).
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+STATIC_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class TfOutput:
+    """The /tf and /tf_static publishers, or none and one log line without tf2_msgs.
+
+    Parameters
+    ----------
+    node : rigid_sim.node.RigidSimNode, creates the publishers through its ``qos_overrides``
+    """
+
+    def __init__(self, node):
+        self.available = TFMessage is not None
+        self.dynamic = self._static = None
+        if not self.available:
+            node.get_logger().info('tf2_msgs is not installed: /tf and /tf_static are off '
+                                   '(poses are on ~/poses and ~/<body>/pose)')
+            return
+        self.dynamic = node.qos_overrides.create_publisher(TFMessage, '/tf', TF_QOS)
+        self._static = node.qos_overrides.create_publisher(TFMessage, '/tf_static', STATIC_QOS)
+
+    def message(self, transforms):
+        """A TFMessage holding ``transforms`` (list of TransformStamped), or None without tf."""
+        return TFMessage(transforms=transforms) if self.available else None
+
+    def publish_static(self, transforms):
+        """Publish ``transforms`` as the node's one /tf_static message, replacing the last."""
+        if self.available:
+            self._static.publish(TFMessage(transforms=transforms))

@@ -1,0 +1,45 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The compiled kernels: warming them up changes nothing, and inputs are not effects."""
+import numpy as np
+
+import physics_cases as cases
+from rigid_sim.core.effects.gravity import Gravity
+from rigid_sim.core.inputs import AppliedWrenches
+from rigid_sim.core.integrators import REGISTRY
+from rigid_sim.core.warm_up import warm_up
+
+
+def test_warm_up_leaves_the_world_as_it_was():
+    """warm_up compiles or loads every kernel a world uses and reports the seconds it took,
+    without moving the world: state, time, counters and diagnostics stay as they were, and
+    the next step is the step an unwarmed twin takes."""
+    def build():
+        bodies = cases.make_bodies(1.5, np.diag([0.3, 0.5, 0.7]))
+        inputs = AppliedWrenches(bodies)
+        inputs.hold(0, 'push', 'body', (1.0, 0.0, 0.0), (0.0, 0.1, 0.0))
+        return cases.make_world(bodies, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 1.0),
+                                (0.2, 0.0, 0.0), (1.0, -2.0, 3.0),
+                                [Gravity(bodies, (0.0, 0.0, -9.81))], 'exact_split',
+                                inputs=inputs)
+    world, twin = build(), build()
+    before = world.y.copy()
+    seconds = warm_up(world)
+    assert seconds > 0.0
+    np.testing.assert_array_equal(world.y, before)
+    assert world.time == 0.0 and world.integrator.evaluations == 0
+    assert world.diagnostics == twin.diagnostics
+    world.step(0.01)
+    twin.step(0.01)
+    np.testing.assert_array_equal(world.y, twin.y)
+
+
+def test_every_integrator_carries_its_own_step_bound():
+    """Each registered method declares the bound the guard splits its steps by: positive
+    numbers (inf: unbounded), and the exact-flow splittings leave torque-free bodies out."""
+    for name, cls in REGISTRY.items():
+        bound = cls.bound
+        assert bound.oscillation > 0.0 and bound.rotation > 0.0, name
+        assert bound.kind in ('accuracy', 'stability', 'none'), name
+    assert not REGISTRY['exact_split'].bound.rotation_all
+    assert REGISTRY['dlm'].bound.rotation_all and REGISTRY['rk4'].bound.rotation_all

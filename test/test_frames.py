@@ -1,0 +1,120 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Frames: the transforms for tf, frame_prefix, and markers cleared on a scene reload.
+
+tf2_msgs has no wheel here, so the TransformStamped lists are checked as built (their
+wrapping into a TFMessage is the one untested line); the node is checked to run without it.
+"""
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+from std_srvs.srv import SetBool
+from visualization_msgs.msg import Marker
+
+from rigid_sim import conversions
+from rigid_sim.core.scene import build_world, parse_scene
+from rigid_sim.node import RigidSimNode
+from ros_harness import spin_until
+
+SCENE = """
+bodies:
+  - name: box
+    shape: {type: box, size: [0.4, 0.2, 0.1]}
+    mass: 2.0
+    pose: {position: [1.0, 2.0, 3.0], orientation: [0.0, 0.0, 0.38268343, 0.92387953]}
+    twist: {angular: [0.0, 0.0, 1.0]}
+    points: {thruster: [-0.2, 0.0, 0.0], top: [0.0, 0.0, 0.05]}
+    imu: {point: [0.1, 0.05, 0.0]}
+  - name: ball
+    shape: {type: sphere, radius: 0.1}
+    mass: 1.0
+    pose: {position: [0.0, -1.0, 0.0]}
+    imu: {point: top}
+    points: {top: [0.0, 0.0, 0.1]}
+"""
+
+
+def test_body_transforms_carry_the_published_poses_under_prefixed_frames():
+    scene = parse_scene(yaml.safe_load(SCENE))
+    world = build_world(scene, 'rk4')
+    messages = conversions.StateMessages(scene.bodies, 'world', 'sim1/')
+    messages.fill(world.snapshot(), range(2), range(2))
+    messages.fill_transforms()
+    assert [t.child_frame_id for t in messages.transforms] == ['sim1/box', 'sim1/ball']
+    assert [m.child_frame_id for m in messages.odometry] == ['sim1/box', 'sim1/ball']
+    for transform, pose in zip(messages.transforms, messages.poses):
+        assert transform.header.frame_id == 'world'
+        assert transform.header.stamp == pose.header.stamp
+        t, r = transform.transform.translation, transform.transform.rotation
+        p, q = pose.pose.position, pose.pose.orientation
+        assert (t.x, t.y, t.z, r.x, r.y, r.z, r.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
+    np.testing.assert_allclose([messages.transforms[0].transform.translation.x,
+                                messages.transforms[0].transform.translation.y], [1.0, 2.0])
+
+
+def test_static_transforms_place_every_point_and_imu_frame_on_its_body():
+    """<body> -> <body>/<point> at the point's body-frame coordinates, no rotation; an IMU
+    given by coordinates adds <body>/imu, one at a named point adds nothing new."""
+    scene = parse_scene(yaml.safe_load(SCENE))
+    statics = conversions.static_transforms(scene.bodies, 'sim1/', 0.0)
+    found = {(t.header.frame_id, t.child_frame_id): t.transform for t in statics}
+    assert sorted(found) == [('sim1/ball', 'sim1/ball/top'), ('sim1/box', 'sim1/box/imu'),
+                             ('sim1/box', 'sim1/box/thruster'), ('sim1/box', 'sim1/box/top')]
+    for (_, child), transform in found.items():
+        t, r = transform.translation, transform.rotation
+        body, point = child.split('/')[1:]
+        expected = {'thruster': [-0.2, 0.0, 0.0], 'imu': [0.1, 0.05, 0.0],
+                    'top': [0.0, 0.0, 0.05 if body == 'box' else 0.1]}[point]
+        assert [t.x, t.y, t.z] == expected
+        assert (r.x, r.y, r.z, r.w) == (0.0, 0.0, 0.0, 1.0)
+
+
+def test_node_runs_without_tf2_msgs_and_says_so_once(ros_context, write_scene, capfd):
+    node = RigidSimNode(context=ros_context, cli_args=['--ros-args', '-p',
+                                                       f'scene:={write_scene(SCENE)}'])
+    node.loop.stop()
+    for _ in range(3):
+        node.tick()
+    assert not node.outputs.tf_available
+    assert capfd.readouterr().err.count('/tf and /tf_static are off') == 1
+    node.destroy_node()
+
+
+def test_frame_prefix_names_frames_in_messages_and_wrenches_may_use_it(harness, write_scene):
+    """Odometry child and IMU frames carry the prefix; a wrench at 'sim1/box/thruster' acts
+    at the thruster: a body-axes force f at p = (-0.2, 0, 0) gives torque p x f about z."""
+    sim = harness(write_scene(SCENE), frame_prefix='sim1/', time_step=1 / 64,
+                  wrench_timeout=0.0)
+    assert sim.call(SetBool, 'pause', SetBool.Request(data=True)).success
+    sim.push('box', 'sim1/box/thruster', [0.0, 1.0, 0.0])
+    sim.tick(1)
+    assert sim.latest('box/odom').child_frame_id == 'sim1/box'
+    world_torque, = sim.sim.world.net_wrench()[1][:1]
+    turn = Rotation.from_quat([0.0, 0.0, 0.38268343, 0.92387953])
+    np.testing.assert_allclose(world_torque, turn.apply(np.cross([-0.2, 0, 0], [0, 1, 0])),
+                               atol=1e-12)
+    assert sim.diagnostics()['refused inputs'] == '0'
+
+
+@pytest.mark.parametrize('prefix', ['/sim1/', 'sim 1', 'a//b'])
+def test_bad_frame_prefix_is_refused(harness, write_scene, prefix):
+    sim = harness(write_scene(SCENE))
+    result, = sim.set_parameters(frame_prefix=prefix)
+    assert not result.successful and 'frame_prefix' in result.reason
+    assert sim.sim.settings.frame_prefix == ''
+
+
+def test_scene_reload_clears_the_old_markers_first(harness, write_scene):
+    """A reload sends one DELETEALL marker, then the new scene's markers."""
+    sim = harness(write_scene(SCENE))
+    sim.tick(1)
+    one_body = write_scene('bodies:\n  - {name: cube, shape: {type: box, size: [1, 1, 1]}, '
+                           'mass: 1.0}\n', 'one.yaml')
+    markers = sim.received[sim.topic('markers')]
+    assert sim.set_parameters(scene=one_body)[0].successful
+    spin_until(sim.executor, lambda: len(markers) == 2, what='markers cleared')
+    assert [m.action for m in markers[1].markers] == [Marker.DELETEALL]
+    sim.listen()
+    sim.tick(1)
+    assert [m.ns for m in markers[-1].markers] == ['cube']
