@@ -90,8 +90,8 @@ class StateOutputs:
         self.set_frame(scene, world_frame, frame_prefix)
 
     def _made(self, slot, name):
-        return self._node.qos_overrides.create_publisher(
-            BODY_TOPICS[slot][0], name, QUEUE_DEPTH, event_callbacks=NO_EVENTS)
+        return self._node.qos_overrides.create_publisher(BODY_TOPICS[slot][0], name,
+                                                         QUEUE_DEPTH, event_callbacks=NO_EVENTS)
 
     def _make_on_demand(self):
         """Make the awaited per-body publishers whose topic has appeared in the graph."""
