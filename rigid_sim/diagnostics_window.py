@@ -61,11 +61,11 @@ def window_values(stats, world, target_real_time_factor):
 def refusal_values(refused, last_refusal, superseded):
     """Return the key -> value of refused and superseded inputs.
 
-    Refused: the total, per body, and the last reason; superseded by a newer message before
-    a tick: the total.
+    Refused: the total, per body that had any (a scene may have 10 000 bodies), and the
+    last reason; superseded by a newer message before a tick: the total.
     """
     return {'refused inputs': sum(refused.values()),
-            **{f'refused inputs {name}': count for name, count in refused.items()},
+            **{f'refused inputs {name}': count for name, count in refused.items() if count},
             'last refused input': last_refusal,
             'superseded inputs': sum(superseded.values())}
 

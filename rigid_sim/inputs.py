@@ -70,10 +70,14 @@ class BodyInputs:
     node : rclpy.node.Node
         Creates and destroys the subscriptions; its logger warns about refusals.
     scene : rigid_sim.core.scene.Scene
+    per_body_limit : int
+        Up to this many bodies, the wrench topics are subscribed to at once; in a larger
+        scene, as set_pose is, once a publisher appears.
     """
 
-    def __init__(self, node, scene):
+    def __init__(self, node, scene, per_body_limit):
         self._node = node
+        self.per_body_limit = per_body_limit
         self._subscriptions = []
         self._awaited = {}         # resolved topic name -> (topic, body index), not subscribed
         # (topic, body index, frame_id) -> newest message since the last tick
@@ -92,10 +96,16 @@ class BodyInputs:
         """Subscribe to the wrench topic of every body of ``scene`` that takes wrenches."""
         for subscription in self._subscriptions:
             self._node.destroy_subscription(subscription)
+        wrenched = [(index, body) for index, body in enumerate(scene.bodies)
+                    if body.wrench_input]
+        at_once = len(scene.bodies) <= self.per_body_limit
         self._subscriptions = [self._subscribe(WrenchStamped, 'wrench', index, body.name)
-                               for index, body in enumerate(scene.bodies) if body.wrench_input]
+                               for index, body in wrenched if at_once]
+        awaited = [(index, body, topic) for index, body in enumerate(scene.bodies)
+                   for topic, _ in STATE_TOPICS]
+        awaited += [] if at_once else [(index, body, 'wrench') for index, body in wrenched]
         self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/{topic}'): (topic, index)
-                         for index, body in enumerate(scene.bodies) for topic, _ in STATE_TOPICS}
+                         for index, body, topic in awaited}
         self._names = [body.name for body in scene.bodies]
         self.clear()
         self.refusals = Refusals(self._names)
@@ -133,11 +143,11 @@ class BodyInputs:
         self._inbox[key] = message   # at the end: applied in the order of the newest
 
     def subscribe_on_demand(self):
-        """Subscribe to every set_pose and set_twist topic that has appeared in the graph."""
+        """Subscribe to every awaited input topic that has appeared in the graph."""
         if not self._awaited:
             return
         present = {name for name, _ in self._node.get_topic_names_and_types()}
-        kinds = dict(STATE_TOPICS)
+        kinds = dict(STATE_TOPICS, wrench=WrenchStamped)
         for name in present & self._awaited.keys():
             topic, index = self._awaited.pop(name)
             self._subscriptions.append(self._subscribe(kinds[topic], topic, index,

@@ -75,9 +75,10 @@ class RigidSimNode(Node):
         self._clock_publisher = self.qos_overrides.create_publisher(ClockMessage, '/clock',
                                                                     QUEUE_DEPTH)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
-                                    self.settings.frame_prefix)
+                                    self.settings.frame_prefix,
+                                    self.settings.per_body_topics_limit)
         self.imu_outputs = ImuOutputs(self, self.scene, self.world, self.settings.frame_prefix)
-        self.inputs = BodyInputs(self, self.scene)
+        self.inputs = BodyInputs(self, self.scene, self.settings.per_body_topics_limit)
         self.loop = TickLoop(self, self.tick, self.settings.rate)
         self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
                                   step=self.step, now=lambda: self.world.time,
@@ -237,6 +238,8 @@ class RigidSimNode(Node):
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""
+        self.outputs.per_body_limit = self.inputs.per_body_limit = \
+            self.settings.per_body_topics_limit
         self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
         self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
         self.inputs.wire(self.scene)

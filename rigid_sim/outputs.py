@@ -4,7 +4,10 @@
 
 Outputs nobody subscribes to are neither filled nor sent. Who listens is asked again every
 ``LISTENER_REFRESH`` seconds of wall time, not on every tick, because asking costs about a
-microsecond and a half per topic.
+microsecond and a half per topic. A scene of more than ``per_body_limit`` bodies starts
+without per-body publishers (30 000 of them took minutes to make and stalled the executor):
+each is made at such a refresh once a subscriber to its topic appears in the graph; the
+PoseArray and the markers are always there.
 """
 import math
 import time
@@ -40,10 +43,14 @@ class StateOutputs:
         frame_id of every published pose.
     frame_prefix : str
         Prefixed to every body and point frame.
+    per_body_limit : int
+        Up to this many bodies, every per-body publisher is made at once.
     """
 
-    def __init__(self, node, scene, world_frame, frame_prefix):
+    def __init__(self, node, scene, world_frame, frame_prefix, per_body_limit):
         self._node = node
+        self.per_body_limit = per_body_limit
+        self._awaited = {}           # resolved topic name -> (body index, slot), not made
         self._pose_array = node.qos_overrides.create_publisher(PoseArray, '~/poses',
                                                                QUEUE_DEPTH)
         self._markers = node.qos_overrides.create_publisher(MarkerArray, '~/markers',
@@ -69,13 +76,29 @@ class StateOutputs:
             self._markers.publish(conversions.delete_all_markers())
         for publishers in self._bodies:
             for publisher in publishers:
-                self._node.destroy_publisher(publisher)
-        create = self._node.qos_overrides.create_publisher
-        self._bodies = [[create(kind, f'~/{body.name}/{topic}', QUEUE_DEPTH,
-                                event_callbacks=NO_EVENTS)
-                         for kind, topic in BODY_TOPICS]
-                        for body in scene.bodies]
+                if publisher is not None:
+                    self._node.destroy_publisher(publisher)
+        names = [[f'~/{body.name}/{topic}' for _, topic in BODY_TOPICS] for body in scene.bodies]
+        self._awaited = {}
+        if len(scene.bodies) <= self.per_body_limit:
+            self._bodies = [[self._made(slot, name) for slot, name in enumerate(row)]
+                            for row in names]
+        else:
+            self._bodies = [[None] * len(BODY_TOPICS) for _ in scene.bodies]
+            self._awaited = {self._node.resolve_topic_name(name): (index, slot)
+                             for index, row in enumerate(names) for slot, name in enumerate(row)}
         self.set_frame(scene, world_frame, frame_prefix)
+
+    def _made(self, slot, name):
+        return self._node.qos_overrides.create_publisher(BODY_TOPICS[slot][0], name,
+                                                         QUEUE_DEPTH, event_callbacks=NO_EVENTS)
+
+    def _make_on_demand(self):
+        """Make the awaited per-body publishers whose topic has appeared in the graph."""
+        present = {name for name, _ in self._node.get_topic_names_and_types()}
+        for name in present & self._awaited.keys():
+            index, slot = self._awaited.pop(name)
+            self._bodies[index][slot] = self._made(slot, name)
 
     def set_frame(self, scene, world_frame, frame_prefix):
         """Rebuild the reused messages of ``scene`` for new frame names; resend tf_static."""
@@ -119,8 +142,10 @@ class StateOutputs:
 
     def _find_listeners(self):
         """Which outputs have subscribers: per body (pose, twist, odometry) and aggregates."""
-        self._listened = [[publisher.get_subscription_count() > 0 for publisher in publishers]
-                          for publishers in self._bodies]
+        if self._awaited:
+            self._make_on_demand()
+        self._listened = [[publisher is not None and publisher.get_subscription_count() > 0
+                           for publisher in publishers] for publishers in self._bodies]
         self._listened_bodies = [index for index, wanted in enumerate(self._listened)
                                  if any(wanted)]
         self._moving_bodies = [index for index, (_, twist, odometry) in enumerate(self._listened)

@@ -28,6 +28,9 @@ MIN_TIME_STEP = 1e-9
 MAX_SUBSTEPS = 1000
 # Below float64 round-off an adaptive integrator can only shrink its steps forever.
 MIN_TOLERANCE = 1e-12
+# Each subscription and publisher slows every executor round (docs/performance.md): a
+# scene larger than this makes its per-body topics only when someone uses them.
+PER_BODY_TOPICS_LIMIT = 100
 MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
 # A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
 FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
@@ -60,6 +63,7 @@ class Settings:
     start_paused: bool     # integration paused at start
     step_ticks: int        # ticks one ~/step call advances
     frame_prefix: str      # prefixed to every body and point frame
+    per_body_topics_limit: int  # up to this many bodies, every per-body topic exists at start
 
     @property
     def publish_every(self):
@@ -120,6 +124,11 @@ SPECS = {
                          pattern=r'(?!/)(?!.*//)[A-Za-z0-9_/]*',
                          pattern_meaning='letters, digits, _ and /, not starting with / and '
                                          'without //'),
+    'per_body_topics_limit': Spec(int, 'a scene of at most this many bodies has every '
+                                       "body's pose, twist, odom and wrench topic from the "
+                                       'start; in a larger one each is made once a '
+                                       'subscriber (wrench: a publisher) appears on it; read '
+                                       'when a scene is loaded', 0, 1_000_000),
 }
 
 
@@ -208,7 +217,8 @@ def declare(node):
     defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
-                'step_ticks': 1, 'frame_prefix': ''}
+                'step_ticks': 1, 'frame_prefix': '',
+                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)

@@ -69,6 +69,11 @@ def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
     assert written.startswith('# Hand-written title')
     assert f'<!-- {SECTION}: begin -->' in written
     assert table_rows(written) == rows
+    started = written.split('### Start and stop of the executable', 1)[1].split('###')[0]
+    start_rows = [[cell.strip() for cell in line.split('|')[1:-1]]
+                  for line in started.splitlines() if line.startswith('| 10 ')]
+    assert len(start_rows) == 1 and start_rows[0][3] == '0'   # exit status 0 after SIGINT
+    assert 0.0 < float(start_rows[0][1]) and 0.0 < float(start_rows[0][2])
 
 
 def test_only_one_millisecond_steps_count_towards_the_1_khz_goals():

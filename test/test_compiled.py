@@ -43,3 +43,19 @@ def test_every_integrator_carries_its_own_step_bound():
         assert bound.kind in ('accuracy', 'stability', 'none'), name
     assert not REGISTRY['exact_split'].bound.rotation_all
     assert REGISTRY['dlm'].bound.rotation_all and REGISTRY['rk4'].bound.rotation_all
+
+
+def test_carlson_integrals_match_scipy():
+    """R_F and R_J written out by Carlson's duplication agree with scipy's to round-off over
+    the arguments the free flow passes (x, y in [0, 1], y down to 1e-30, z = 1, p > 1), and
+    R_F(x, y, z) keeps its closed forms: R_F(x, x, x) = x^-1/2, R_F(0, 1, 1) = pi / 2."""
+    from scipy import special as reference
+    from rigid_sim.core.special import elliprf, elliprj
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        x, y, p = rng.uniform(0.0, 1.0), 10.0 ** rng.uniform(-30.0, 0.0), rng.uniform(1.0, 30.0)
+        x = 0.0 if rng.uniform() < 0.2 else x
+        assert abs(elliprf(x, y, 1.0) / reference.elliprf(x, y, 1.0) - 1.0) < 1e-14
+        assert abs(elliprj(x, y, 1.0, p) / reference.elliprj(x, y, 1.0, p) - 1.0) < 1e-14
+    assert abs(elliprf(4.0, 4.0, 4.0) - 0.5) < 1e-16
+    assert abs(elliprf(0.0, 1.0, 1.0) - np.pi / 2.0) < 4e-16

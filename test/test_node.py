@@ -388,3 +388,33 @@ def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
     for node in (sim, late):
         node.destroy_node()
     executor.shutdown()
+
+
+def test_a_large_scene_makes_per_body_topics_when_they_are_used(harness, write_scene):
+    """Above per_body_topics_limit bodies, no per-body topic exists until someone uses it.
+
+    ~/poses is there from the start; a subscriber to one body's pose gets that publisher
+    made, a publisher on one body's wrench gets that subscription made, and the wrench acts:
+    the box leaves with F t / M.
+    """
+    sim = harness(write_scene(SCENE), time_step=STEP, wrench_timeout=0.0,
+                  per_body_topics_limit=2, **EXACT_FOR_CONSTANT_FORCE)
+    node, executor = sim.sim, sim.executor
+    assert node.count_publishers(sim.topic('box/pose')) == 0
+    assert node.count_subscribers(sim.topic('box/wrench')) == 0
+    assert node.count_publishers(sim.topic('poses')) == 1
+
+    def tick_until(condition, what):
+        deadline = time.monotonic() + 15.0
+        while not condition():
+            assert time.monotonic() < deadline, what
+            node.tick()
+            executor.spin_once(timeout_sec=0.05)
+    tick_until(lambda: sim.received[sim.topic('box/pose')], 'box/pose made and received')
+    assert node.count_publishers(sim.topic('rod/twist')) == 1   # the harness listens to all
+    sim.push('box', 'world', [4.0, 0.0, 0.0])
+    start = node.world.time
+    node.tick()
+    velocity = node.world.snapshot().body_frame_twist()[0][0]
+    np.testing.assert_allclose(velocity, V0 + np.array([4.0, 0, 0]) * (node.world.time - start)
+                               / MASS, atol=1e-12)

@@ -114,11 +114,10 @@ def test_misspelt_parameter_in_params_file_is_refused(ros_context, write_scene, 
 
 
 def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context):
-    """Shipped parameter file lists every parameter at its default.
+    """Check config/rigid_sim.yaml names each parameter once, at its default value.
 
-    config/rigid_sim.yaml names each parameter once; what it sets has its default value, and the
-    two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in a comment: the
-    file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs.
+    The two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in a
+    comment: the file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs.
     """
     text = SHIPPED_PARAMETERS.read_text()
     listed = yaml.safe_load(text)['/**']['ros__parameters']

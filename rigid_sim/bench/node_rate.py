@@ -53,7 +53,10 @@ CONFIGS = (Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            Config(1000, 50.0, 2e-2, 1, 50.0, 'poses'))
 QUICK = dict(configs=(Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
                       Config(10, 100.0, 1e-2, 10, 100.0, 'poses')),
-             duration=0.5, warmup=0.3)
+             duration=0.5, warmup=0.3, start_sizes=(10,))
+# Scenes (N bodies, every one taking wrenches) the executable is started and stopped on.
+START_SIZES = (1000, 10_000)
+START_TIMEOUT = 120.0   # s
 # The issue's node goals: (N, what is listened, wording), all with 1 kHz physics.
 GOAL_PHYSICS_STEP = 1e-3   # s
 GOALS = ((100, 'bodies', '100 bodies, per-body pose and twist at 100 Hz, 1 kHz physics'),
@@ -73,14 +76,18 @@ class TimedNode(RigidSimNode):
         self.tick_seconds.append(time.perf_counter() - started)
 
 
-def scene_text(n):
-    """YAML of N boxes (1 kg) in a grid 0.5 m apart under gravity, each with its own spin."""
+def scene_text(n, wrench_input=None):
+    """YAML of N boxes (1 kg) in a grid 0.5 m apart under gravity, each with its own spin.
+
+    ``wrench_input`` None: only below WRENCH_INPUT_LIMIT bodies.
+    """
     side = math.ceil(math.sqrt(n))
     spins = np.random.default_rng(n).normal(scale=2.0, size=(n, 3))   # rad/s
     bodies = [{'name': f'box{i}', 'shape': {'type': 'box', 'size': [0.2, 0.1, 0.05]},
                'mass': 1.0, 'pose': {'position': [0.5 * (i % side), 0.5 * (i // side), 1.0]},
                'twist': {'angular': spins[i].tolist()},
-               'wrench_input': n < WRENCH_INPUT_LIMIT} for i in range(n)]
+               'wrench_input': n < WRENCH_INPUT_LIMIT if wrench_input is None
+               else wrench_input} for i in range(n)]
     return yaml.safe_dump({'world_frame': 'world',
                            'effects': {'gravity': {'acceleration': [0.0, 0.0, -9.81]}},
                            'bodies': bodies})
@@ -202,6 +209,41 @@ def measure(config, integrator, context, scene, log_dir, seconds):
                 waitables=waitables)
 
 
+def start_and_stop(scene, log_dir):
+    """Start ``rigid_sim_node`` on ``scene``, then SIGINT it: (start s, stop s, exit status).
+
+    Start: from the process's creation to its log line saying it simulates (imports, scene
+    loading and wiring; its first tick follows). Stop: from SIGINT to the process's end.
+    """
+    executable = Path(sys.executable).with_name('rigid_sim_node')
+    started = time.perf_counter()
+    process = subprocess.Popen(
+        [str(executable), '--ros-args', '-p', f'scene:={scene}', '-r', '__ns:=/bench_start'],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=log_dir)
+    try:
+        for line in process.stdout:
+            if 'simulating' in line:
+                break
+        start = time.perf_counter() - started
+        time.sleep(0.5)   # a few ticks
+        signalled = time.perf_counter()
+        process.send_signal(signal.SIGINT)
+        status = process.wait(START_TIMEOUT)
+        return start, time.perf_counter() - signalled, status
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+        process.stdout.close()
+
+
+def start_table(starts):
+    """Markdown: a row per scene size the executable was started on."""
+    rows = [[n, f'{start:.2f}', f'{stop:.3f}', status] for n, (start, stop, status) in starts]
+    return bench.markdown_table(['N (all taking wrenches)', 'start [s]', 'stop after SIGINT [s]',
+                                 'exit status'], rows)
+
+
 def table(results):
     """Markdown: a row per configuration and integrator."""
     header = ['N', 'integrator', 'rate [Hz] x substeps', 'time_step [s]', 'listened',
@@ -243,8 +285,8 @@ def goals(results):
     return lines
 
 
-def report(results, seconds):
-    """Return the Markdown section: how it was measured, the table, the goals."""
+def report(results, seconds, starts=()):
+    """Return the Markdown section: how it was measured, the tables, the goals."""
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]   # this benchmark times wall clock
     return '\n'.join([
@@ -265,6 +307,11 @@ def report(results, seconds):
         '- Waitables: entities of the node (such as the QoS event handlers rclpy gives every '
         'publisher) that the executor adds to its wait set on every `spin_once`, in Python.',
         '', '### Real-time factor and tick time', table(results),
+        '', '### Start and stop of the executable',
+        '`rigid_sim_node` on a scene of N boxes that all take wrenches, default parameters '
+        '(per-body topics made on demand above `per_body_topics_limit`). Start: process '
+        'creation to the log line that it simulates; stop: SIGINT to the end of the process.',
+        '', start_table(starts),
         '', f'### Goals of issue 6 (met: real-time factor >= {GOAL_RTF}; a wall-clock timer '
         'cannot average above 1, and window edges move it by ~1e-3; only rows whose '
         f'integrator steps are <= {1e3 * GOAL_PHYSICS_STEP:g} ms count as 1 kHz physics)',
@@ -286,7 +333,8 @@ def add_arguments(parser):
 
 def main(args):
     """Run every configuration, print the Markdown report, write ``--out``; the results."""
-    chosen = QUICK if args.quick else dict(configs=CONFIGS, duration=DURATION, warmup=WARMUP)
+    chosen = QUICK if args.quick else dict(configs=CONFIGS, duration=DURATION, warmup=WARMUP,
+                                           start_sizes=START_SIZES)
     seconds = (chosen['warmup'] if args.warmup is None else args.warmup,
                chosen['duration'] if args.duration is None else args.duration)
     results = []
@@ -304,7 +352,13 @@ def main(args):
                           f'{results[-1]["real_time_factor"]:.3f}', file=sys.stderr)
         finally:
             rclpy.try_shutdown(context=context)
-    text = report(results, seconds)
+        starts = []
+        for n in chosen['start_sizes']:
+            scene = Path(log_dir, f'wrenched_{n}.yaml')
+            scene.write_text(scene_text(n, wrench_input=True))
+            starts.append((n, start_and_stop(str(scene), log_dir)))
+            print(f'start and stop at N = {n}: {starts[-1][1]}', file=sys.stderr)
+    text = report(results, seconds, starts)
     print(text)
     if args.out is not None:
         bench.write_section(args.out, SECTION, text)

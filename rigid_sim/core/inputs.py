@@ -1,5 +1,7 @@
-"""Inputs of a world: wrenches applied from outside (user commands), held until replaced or
-timed out. They are not an effect of the scene: the world always has them (``world.inputs``).
+"""Inputs of a world: wrenches applied from outside, held until replaced or timed out.
+
+They come from users (commands), not from the scene, so they are not an effect: the world
+always has them (``world.inputs``).
 
 Each held wrench has a body, a key (the ROS frame_id it came with: a new wrench with the
 same body and key replaces it) and one of four ways to act:
@@ -38,6 +40,8 @@ EXPIRY_SLACK = 1e-9   # s
 
 @dataclass(frozen=True)
 class HeldWrench:
+    """One wrench as held (a ``point`` force already folded into body force and torque)."""
+
     body: int
     frame: str
     force: np.ndarray    # (3,) N

@@ -139,8 +139,11 @@ def angular_velocities(y, inertia_inv, out):
 
 @njit(cache=True)
 def check_substep(y):
-    """0 if ``y`` (N, 13) is finite with unit quaternions, 1 if non-finite, -1 if a quaternion
-    is not unit (it overflowed before it was normalised)."""
+    """Check a state after a substep: 0 good, 1 non-finite, -1 a quaternion not unit.
+
+    A quaternion off unit by more than :data:`UNIT_QUATERNION_SLACK` overflowed before it
+    was normalised. ``y`` is the packed state (N, 13).
+    """
     for i in range(y.shape[0]):
         for k in range(13):
             if not math.isfinite(y[i, k]):

@@ -131,6 +131,11 @@ def vector(value, key, length=3, bound=None):
     """Check a (length,) float array from a YAML list of finite numbers."""
     if not isinstance(value, (list, tuple)) or len(value) != length:
         raise Mistake(key, f'expected a list of {length} numbers, got {describe(value)}')
+    # The common case checked at once (a NaN fails the comparison); the rest item by item,
+    # which says what is wrong where: 10 000 bodies have 50 000 vectors.
+    low = {'positive': 1.0 / MAX_MAGNITUDE, 'non-negative': 0.0}.get(bound, -MAX_MAGNITUDE)
+    if all(type(item) is float and low <= item <= MAX_MAGNITUDE for item in value):
+        return np.array(value)
     return np.array([number(item, f'{key}[{i}]', bound) for i, item in enumerate(value)])
 
 

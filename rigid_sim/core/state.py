@@ -67,6 +67,7 @@ class RigidBodies:
 
     @property
     def count(self):
+        """Number of bodies N."""
         return len(self.names)
 
     @cached_property

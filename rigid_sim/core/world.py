@@ -61,6 +61,7 @@ class World:
 
     @y.setter
     def y(self, state):
+        """Replace the state: (N, 13), read fresh by the next step."""
         self._y = np.ascontiguousarray(state, dtype=float)
         self._spare = None
 
@@ -148,8 +149,11 @@ class World:
         return None
 
     def _scratch(self):
-        """An (N, 13) array to step into: the state the last step replaced, when no one else
-        holds it (a fresh array at large N costs page faults), else a new one."""
+        """An (N, 13) array to step into.
+
+        The state the last step replaced, when no one else holds it (a fresh array at large N
+        costs page faults), else a new one.
+        """
         spare = self._spare
         # References: this attribute, the local name and getrefcount's own argument.
         if spare is None or sys.getrefcount(spare) > 3 or spare is self._y:

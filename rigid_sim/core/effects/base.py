@@ -23,6 +23,7 @@ KERNELS = {}   # NamedTuple class of an effect's parameters -> its compiled kern
 def kernel_for(parameter_class):
     """Register the decorated compiled kernel as the one for ``parameter_class``."""
     def register(kernel):
+        """Record ``kernel`` and hand it back unchanged."""
         KERNELS[parameter_class] = kernel
         return kernel
     return register
@@ -65,14 +66,24 @@ def _apply_one_overload(parameters, y, time, model, force, torque):
     kernel = KERNELS[parameters.instance_class]
 
     def apply(parameters, y, time, model, force, torque):
+        """Call the registered kernel."""
         kernel(parameters, y, time, model, force, torque)
     return apply
 
 
 @njit(cache=True)
 def accumulate(effects, y, time, model, force, torque):
-    """Zero ``force`` and ``torque`` (N, 3), then add the wrench of every effect in the tuple
-    ``effects`` (their parameters; never empty: the world's inputs come last)."""
+    """Net wrench of every effect in ``effects`` into ``force`` and ``torque``.
+
+    Parameters
+    ----------
+    effects : tuple of the effects' parameter NamedTuples; never empty (the world's inputs
+        come last)
+    y : (N, 13) float, packed state [x, q, P, L], world axes
+    time : float, s
+    model : Model, the bodies' static arrays
+    force, torque : (N, 3) float, overwritten: world axes, about each centre of mass, N and N m
+    """
     force[:, :] = 0.0
     torque[:, :] = 0.0
     for parameters in literal_unroll(effects):

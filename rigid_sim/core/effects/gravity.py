@@ -26,6 +26,7 @@ class Gravity(Effect):
 
     @property
     def parameters(self):
+        """The :class:`GravityParameters` of the kernel."""
         return GravityParameters(self._weight)
 
     def potential_energy(self, snapshot):

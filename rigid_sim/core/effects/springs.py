@@ -70,6 +70,7 @@ class Springs(Effect):
 
     @property
     def parameters(self):
+        """The :class:`SpringParameters` of the kernel."""
         return self._parameters
 
     def _inverse_effective_mass(self, bodies):

@@ -141,8 +141,20 @@ def shape_constants(i):
 
 @njit(cache=True)
 def elliptic_working(i, m, time, ratio, nu):
-    """Advance m (3-tuple) by ``time`` and build ``B0^T Rz(dpsi) B1`` (4-tuple) in the working
-    frame of moments ``i``, with ``ratio`` and ``nu`` from :func:`shape_constants`."""
+    """Advance m and build ``B0^T Rz(dpsi) B1`` in the working frame.
+
+    Parameters
+    ----------
+    i : 3-tuple, working-frame moments (scaled), ``I1 < I2 < I3`` or reversed
+    m : 3-tuple, angular momentum in the working frame (scaled), ``m1 >= 0``
+    time : float, scaled time
+    ratio, nu : floats from :func:`shape_constants` of ``i``
+
+    Returns
+    -------
+    m : 3-tuple, after ``time``
+    core : 4-tuple quaternion (x, y, z, w), the working-frame rotation of the step
+    """
     k2, mc, amp, rate = _invariants(i, m)
     h = math.hypot(ratio * m[1], m[0])
     s0 = ratio * m[1] / h if h > 0.0 else 0.0

@@ -167,8 +167,11 @@ def _axisymmetric(axis, i_axis, i_perp, m, time):
 
 @njit(cache=True)
 def _working_frame(order, s, m):
-    """The working frame (9-tuple) of m and its moments: axis 3 the one m circles (major, or
-    minor below the separatrix), a proper signed permutation with ``m1 >= 0``."""
+    """The working frame (9-tuple, body to working) of ``m`` and its moments (3-tuple).
+
+    Axis 3 is the one m circles (major, or minor below the separatrix); the frame is a
+    proper signed permutation with ``m1 >= 0``.
+    """
     x, y, z = _unit_axis(order[0]), _unit_axis(order[1]), _unit_axis(order[2])
     if kin.dot(x, kin.cross(y, z)) < 0.0:
         x = (-x[0], -x[1], -x[2])
@@ -204,8 +207,11 @@ def _matrix_quaternion(r):
 
 @njit(cache=True)
 def _asymmetric(order, s, m, time):
-    """Elliptic free motion of an asymmetric body: new m and body-frame rotation step, from
-    m in working units and the scaled time."""
+    """Elliptic free motion of an asymmetric body.
+
+    From ``m`` (3-tuple, working units) and the scaled time: the new m and the body-frame
+    rotation step (4-tuple).
+    """
     frame, moments = _working_frame(order, s, m)
     ratio, nu = shape_constants(moments)
     m_working, core = elliptic_working(moments, kin.rotate(frame, m), time, ratio, nu)

@@ -38,8 +38,11 @@ class Tableau:
         return a, np.array(self.b, dtype=float), np.array(self.c, dtype=float)
 
     def chained(self):
-        """``a`` as its subdiagonal (S,), ``b``, ``c``: for tableaux whose stages each use only
-        the slope before (forward Euler, classical RK4), which need no stored slopes."""
+        """``a`` as its subdiagonal (S,), ``b`` (S,) and ``c`` (S,).
+
+        For tableaux whose stages each use only the slope before (forward Euler, classical
+        RK4), which then need no stored slopes; ValueError for any other.
+        """
         a, b, c = self.arrays()
         if np.any(np.tril(a, -2)):
             raise ValueError('a stage uses a slope other than the one before it')
@@ -132,8 +135,11 @@ def _to_public(y, body_axes):
 
 @njit(cache=True)
 def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
-    """One step of ``h`` in place: every stage uses only the slope of the one before, so no
-    slope is stored: each body's slope goes straight into the sum and the next stage."""
+    """One step of ``h`` on ``y`` in place.
+
+    Every stage uses only the slope of the one before, so no slope is stored: each body's
+    slope goes straight into the sum and into the next stage.
+    """
     start, world, momentum, force, torque = work
     _to_internal(y, start, body_axes)
     world[:, :] = y
@@ -152,8 +158,17 @@ def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
 
 @njit(cache=True)
 def body_momentum_derivative(inner, work, model, effects, time, out):
-    """``d/dt`` (N, 13) of the body-axes internal state ``inner`` at ``time``, into ``out``;
-    ``work`` is ``(world (N, 13), momentum (N, 3), force, torque)`` scratch."""
+    """Time derivative of the body-axes internal state, for an external stepper.
+
+    Parameters
+    ----------
+    inner : (N, 13) float, [x, q, P, L_b]: ``L_b`` in body axes
+    work : tuple, scratch (world (N, 13), momentum (N, 3), force (N, 3), torque (N, 3))
+    model : Model
+    effects : tuple of the effects' parameters (see ``effects.base.accumulate``)
+    time : float, s
+    out : (N, 13) float, where ``d inner / dt`` is written and returned
+    """
     world, momentum, force, torque = work
     zero = (0.0, 0.0, 0.0)
     for i in range(inner.shape[0]):
@@ -191,7 +206,7 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes)
 
 
 # One kernel per formulation, the flag a constant inside: compiled in, the per-body branch
-# on it disappears (as a runtime argument it measured 2.5x slower at N = 1e4).
+# on it disappears, which a runtime flag keeps in every body's loop.
 @njit(cache=True)
 def body_axes_runge_kutta(y, work, model, effects, time, h, substeps, a, b, c):
     """:func:`_runge_kutta` on body-axes angular momentum."""
