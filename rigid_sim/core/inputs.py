@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Inputs of a world: wrenches applied from outside, held until replaced or timed out.
 
 They come from users (commands), not from the scene, so they are not an effect: the world

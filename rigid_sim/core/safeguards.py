@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Step safeguards: substeps within each method's bounds, and no non-finite state, ever.
 
 Before a step the world asks :class:`StepGuard` how many equal substeps keep the chosen

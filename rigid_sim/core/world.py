@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The world: a static model, the packed state, its inputs, the scene's effects, one integrator.
 
 As a compiled engine separates model, data and inputs, the World keeps apart what never

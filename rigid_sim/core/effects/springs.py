@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Linear springs with dampers between body points and world anchors or other bodies.
 
 Each spring pulls its two attachment points together with

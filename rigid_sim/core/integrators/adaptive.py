@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Adaptive Dormand-Prince 5(4), driven through scipy's RK45 stepper.
 
 The error of each internal step is held below ``tolerance`` relative to a per-component

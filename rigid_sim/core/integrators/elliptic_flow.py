@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The elliptic branch of the exact free flow, in a body's working frame, compiled per body.
 
 See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the working frame

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Exact torque-free motion of N rigid bodies (Jacobi elliptic functions, Carlson forms).
 
 Quaternions are scalar-last ``(x, y, z, w)`` and map principal body axes to world axes.
