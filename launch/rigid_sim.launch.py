@@ -25,7 +25,7 @@ NUMBERS = ('rate',)   # passed as doubles: the node refuses a text for a number
 
 
 def simulator(context):
-    """The node, with the non-empty arguments as its parameters."""
+    """Describe the node, with the non-empty launch arguments as its parameters."""
     parameters = {}
     for name in ('scene', 'integrator', 'rate'):
         value = LaunchConfiguration(name).perform(context)

@@ -40,7 +40,7 @@ class TfOutput:
         self._static = node.qos_overrides.create_publisher(TFMessage, '/tf_static', STATIC_QOS)
 
     def message(self, transforms):
-        """A TFMessage holding ``transforms`` (list of TransformStamped), or None without tf."""
+        """Wrap ``transforms`` (list of TransformStamped) in a TFMessage, or None without tf."""
         return TFMessage(transforms=transforms) if self.available else None
 
     def publish_static(self, transforms):

@@ -55,8 +55,10 @@ def frame_state(world, index):
 
 
 def test_set_pose_places_the_frame_keeps_its_twist_and_no_other_row(world):
-    """After with_pose the world's kinematics read back the pose set and the twist before;
-    the other body's row and the given array are bitwise unchanged."""
+    """After with_pose the world reads back the pose set and the twist it had before.
+
+    The other body's row and the given array are bitwise unchanged.
+    """
     before = world.y.copy()
     _, _, velocity, angular_velocity = frame_state(world, 0)
     world.y = with_pose(world.bodies, world.y, 0, *POSE)
@@ -70,8 +72,10 @@ def test_set_pose_places_the_frame_keeps_its_twist_and_no_other_row(world):
 
 
 def test_set_twist_moves_the_frame_origin_as_given_and_keeps_the_pose(world):
-    """with_twist sets the velocity of the frame origin (not of the centre of mass): the
-    centre of mass then moves at v + omega x R c, and the momentum is M times that."""
+    """The velocity with_twist sets is the frame origin's, not the centre of mass's.
+
+    The centre of mass then moves at v + omega x R c, and the momentum is M times that.
+    """
     origin, orientation, _, _ = frame_state(world, 0)
     world.y = with_twist(world.bodies, world.y, 0, *TWIST)
     new_origin, new_orientation, velocity, angular_velocity = frame_state(world, 0)
@@ -106,7 +110,7 @@ def test_nearly_unit_quaternion_is_normalised(world):
 
 @pytest.fixture
 def paused(harness, write_scene):
-    """The scene over ROS, paused after two ticks (paused ticks apply inputs and publish)."""
+    """Run the scene over ROS, paused after two ticks (paused ticks apply inputs and publish)."""
     sim = harness(write_scene(MESH_FREE), time_step=STEP, integrator='rk4')
     sim.tick(2)
     assert sim.call(SetBool, 'pause', SetBool.Request(data=True)).success
@@ -114,8 +118,10 @@ def paused(harness, write_scene):
 
 
 def test_set_pose_and_twist_over_ros_take_effect_at_the_next_tick(paused):
-    """Published after the next tick: the pose and twist set, time and the ball untouched;
-    resumed, the ball (a sphere) flies on from them: p + v t, exp([omega] t) R."""
+    """A pose and twist set over ROS are published after the next tick, time untouched.
+
+    Resumed, the ball (a sphere) flies on from them: p + v t, exp([omega] t) R.
+    """
     ball_before = paused.state('ball')
     paused.set_pose('offset', *POSE)
     paused.set_twist('ball', *TWIST)

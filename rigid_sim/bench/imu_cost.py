@@ -36,7 +36,7 @@ TIME_STEP = 1e-3   # s, the 1 kHz physics of the node goals
 
 
 def imu_scene(n, imu):
-    """The boxes scene of N bodies with ``imu`` (a scene entry, or None) on every body."""
+    """Write the boxes scene of N bodies with ``imu`` (a scene entry, or None) on every body."""
     scene = yaml.safe_load(scene_text(n))
     if imu is not None:
         for body in scene['bodies']:
@@ -45,7 +45,7 @@ def imu_scene(n, imu):
 
 
 def start(context, folder, n, variant):
-    """The node on the variant's scene, and a subscriber on its IMU topics and PoseArray."""
+    """Start the node on the variant's scene, and a subscriber on its IMU topics and PoseArray."""
     path = f'{folder}/boxes_{n}_{variant}.yaml'
     with open(path, 'w', encoding='utf-8') as stream:
         stream.write(imu_scene(n, VARIANTS[variant]))

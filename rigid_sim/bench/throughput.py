@@ -68,7 +68,7 @@ def bodies_and_state(n):
 
 @functools.lru_cache(maxsize=None)
 def held_wrenches(n):
-    """The world's inputs for N bodies: the same body-frame wrench held on each."""
+    """Build the world's inputs for N bodies: the same body-frame wrench held on each."""
     wrenches = AppliedWrenches(bodies_and_state(n)[0])
     for i in range(n):
         wrenches.hold(i, 'bench', 'body', FORCE, TORQUE)

@@ -75,7 +75,9 @@ def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
 
 
 def with_pose(bodies, y, index, origin, orientation):
-    """A new state with body ``index``'s frame at ``origin`` (3,) m and ``orientation`` (4,).
+    """Return a new state with body ``index``'s frame at ``origin`` and ``orientation``.
+
+    ``origin`` is (3,), m, world frame; ``orientation`` is (4,), (x, y, z, w), body to world.
 
     The body keeps its twist (velocity of its frame origin and angular velocity, world
     axes). ValueError, nothing changed, for a non-finite value or a quaternion further than
@@ -88,10 +90,11 @@ def with_pose(bodies, y, index, origin, orientation):
 
 
 def with_twist(bodies, y, index, velocity, angular_velocity):
-    """A new state with body ``index``'s frame origin moving at ``velocity`` (3,) m/s and
-    turning at ``angular_velocity`` (3,) rad/s, both world axes; its pose is kept.
+    """Return a new state with body ``index``'s twist set and its pose kept.
 
-    ValueError, nothing changed, for a non-finite value.
+    The frame origin moves at ``velocity`` (3,), m/s, and the body turns at
+    ``angular_velocity`` (3,), rad/s, both in world axes. ValueError, nothing changed, for a
+    non-finite value.
     """
     velocity = _finite('linear velocity', velocity, 3)
     angular_velocity = _finite('angular velocity', angular_velocity, 3)

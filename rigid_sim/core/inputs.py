@@ -193,7 +193,7 @@ class AppliedWrenches:
         self._body_held[body] = any(held.frame == 'body' for held in (wrenches or {}).values())
 
     def _refresh(self):
-        """The kernel's arrays after the world_point holdings changed (the sums stay)."""
+        """Rebuild the kernel's arrays after the world_point holdings changed (the sums stay)."""
         at_points = list(self._at_points.values())
         self._parameters = WrenchInputs(
             self._sums['world'], self._sums['body'], self._body_held,
@@ -204,7 +204,7 @@ class AppliedWrenches:
 
     @property
     def parameters(self):
-        """The :class:`WrenchInputs` the compiled kernel reads."""
+        """Return the :class:`WrenchInputs` the compiled kernel reads."""
         if self._points_stale:
             self._refresh()
         return self._parameters

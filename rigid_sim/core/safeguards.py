@@ -92,7 +92,7 @@ def check_time_step(dt):
 
 
 def failure_message(code, substeps, h):
-    """What an integrator's failure ``code`` (see ``Integrator.advance``) met, in words."""
+    """Describe in words what an integrator's failure ``code`` (see ``Integrator.advance``) met."""
     where = f'substep {abs(code)}/{substeps} of {h:.3g} s'
     if code > 0:
         return f'non-finite state in {where}'

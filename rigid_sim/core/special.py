@@ -57,7 +57,7 @@ def _four_doubles(typingctx):
 
 @intrinsic
 def _load(typingctx, pointer):
-    """The double ``pointer`` points to."""
+    """Load the double that ``pointer`` points to."""
     def codegen(context, builder, sig, args):
         """Load through the pointer."""
         return builder.load(args[0])
@@ -112,8 +112,10 @@ def _elliprc(x, y):
 
 @njit(cache=True)
 def elliprj(x, y, z, p):
-    """Carlson's symmetric integral ``R_J(x, y, z, p)``, x, y, z >= 0 (one zero at most),
-    p > 0."""
+    """Evaluate Carlson's symmetric integral ``R_J(x, y, z, p)``.
+
+    Defined for x, y, z >= 0 with at most one of them zero, and p > 0.
+    """
     if (x == 0.0) + (y == 0.0) + (z == 0.0) > 1:
         return math.inf
     total, factor = 0.0, 1.0

@@ -67,7 +67,7 @@ class RigidBodies:
 
     @property
     def count(self):
-        """Number of bodies N."""
+        """Return the number of bodies N."""
         return len(self.names)
 
     @cached_property
@@ -77,7 +77,7 @@ class RigidBodies:
 
     @cached_property
     def model(self):
-        """The :class:`Model` of these bodies."""
+        """Return the :class:`Model` (static arrays for the kernels) of these bodies."""
         moments, axes = self.principal_moments
         return Model(np.ascontiguousarray(self.inverse_mass),
                      np.ascontiguousarray(self.inertia_body_inv), np.ascontiguousarray(moments),

@@ -68,11 +68,11 @@ class World:
         self._spare = None
 
     def effect(self, kind):
-        """The effect of class ``kind`` in this world, or None when the scene has none."""
+        """Return the effect of class ``kind`` in this world, or None when the scene has none."""
         return next((e for e in self.effects if isinstance(e, kind)), None)
 
     def effect_parameters(self):
-        """The parameters the compiled wrench sum reads: each effect's, then the inputs'."""
+        """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
         return self._effect_parameters + (self.inputs.parameters,)
 
     def reset(self):
@@ -134,7 +134,7 @@ class World:
         return self._guard.plan(self.integrator, y, dt, current)
 
     def _attempt(self, dt, substeps):
-        """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
+        """Step by ``dt``, halving the substeps on a non-finite state; None if every try fails."""
         for halving in range(safeguards.MAX_HALVINGS + 1):
             pieces = substeps << halving
             y = self._scratch()
@@ -151,7 +151,7 @@ class World:
         return None
 
     def _scratch(self):
-        """An (N, 13) array to step into.
+        """Return an (N, 13) array to step into.
 
         The state the last step replaced, when no one else holds it (a fresh array at large N
         costs page faults), else a new one.

@@ -15,7 +15,7 @@ import pytest
 
 @pytest.fixture
 def rigid_sim_context(monkeypatch):
-    """A fresh rclpy context, discovery off, on a domain picked from the process id."""
+    """Give the test a fresh rclpy context, discovery off, on a domain from the process id."""
     import rclpy
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
     context = rclpy.Context()
@@ -26,7 +26,7 @@ def rigid_sim_context(monkeypatch):
 
 @pytest.fixture
 def rigid_sim_executor(rigid_sim_context):
-    """A SingleThreadedExecutor on the test's context."""
+    """Give the test a SingleThreadedExecutor on its context."""
     from rclpy.executors import SingleThreadedExecutor
     executor = SingleThreadedExecutor(context=rigid_sim_context)
     yield executor
@@ -35,7 +35,10 @@ def rigid_sim_executor(rigid_sim_context):
 
 @pytest.fixture
 def rigid_sim(rigid_sim_context, rigid_sim_executor):
-    """Start simulations: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``."""
+    """Give the test a starter of simulations.
+
+    Call it with a scene and parameters: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``.
+    """
     from rigid_sim.testing import Simulation
     made = []
 

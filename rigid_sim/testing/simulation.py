@@ -79,7 +79,7 @@ class Simulation:
         self._nodes = []
 
     def create_node(self, name, **kwargs):
-        """An rclpy Node in the simulation's context, spun by its executor."""
+        """Create an rclpy Node in the simulation's context, spun by its executor."""
         node = Node(name, context=self.context, **kwargs)
         self.executor.add_node(node)
         self._nodes.append(node)
@@ -87,11 +87,11 @@ class Simulation:
 
     @property
     def time(self):
-        """Simulated time, s."""
+        """Return the simulated time, s."""
         return self.node.world.time
 
     def state(self, body):
-        """The :class:`BodyState` of the body named ``body`` now."""
+        """Return the :class:`BodyState` of the body named ``body`` now."""
         index = self.node.world.bodies.index(body)
         snapshot = self.node.world.snapshot()
         origin, orientation = snapshot.body_frame_pose()

@@ -72,7 +72,7 @@ class Springs(Effect):
 
     @property
     def parameters(self):
-        """The :class:`SpringParameters` of the kernel."""
+        """Return the :class:`SpringParameters` the compiled kernel reads."""
         return self._parameters
 
     def _inverse_effective_mass(self, bodies):
