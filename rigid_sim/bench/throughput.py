@@ -136,7 +136,7 @@ def mujoco_time(n, integrator, work, repeats):
 def effect_costs(n, repeats):
     """CPU seconds of one compiled wrench sum of each effect alone at N bodies, per kind.
 
-    Each call from Python includes numba's dispatch (~1 us), which a step pays once per
+    Each call from Python includes numba's dispatch, which a step pays once per
     stage for all its effects together, not per effect.
     """
     bodies, y = bodies_and_state(n)

@@ -36,7 +36,7 @@ DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
 DEFAULT_MAX_TORQUE = 1.0e4  # N m
 # Simulated time is a running sum of float steps (ten steps of 0.01 s end 1e-17 s short of
 # 0.1), so a hold ends at the step that reaches its end to within this: a ROS stamp's
-# resolution. Without it a 0.1 s hold at 0.01 s steps acted 0.11 s.
+# resolution. Without it a hold whose end falls on a step would act one step too long.
 EXPIRY_SLACK = 1e-9   # s
 
 

@@ -5,9 +5,11 @@
 A method is data: its tableau and the momenta it differentiates. Baraff's world-axes ``L``
 has ``omega = R I_body^-1 R^T L`` depend on ``q``, so every error in ``q`` feeds back into
 ``omega`` and grows. Body-axes ``L_b = R^T L`` has ``omega_b = I_body^-1 L_b`` independent
-of ``q`` (Euler's equations): near the intermediate axis RK4 is 1000-2500x more accurate at
-the same step in body axes (docs/accuracy.md). The public state stays Baraff's; only the
-inside of a step changes: in body axes, slots 10:13 of the internal state hold ``L_b``.
+of ``q`` (Euler's equations), so near the intermediate axis RK4 in body axes is orders of
+magnitude more accurate at the same step (``rk4`` against ``rk4_world`` in the tumbling
+table of docs/accuracy.md, made by ``rigid_sim_bench accuracy``). The public state stays
+Baraff's; only the inside of a step changes: in body axes, slots 10:13 of the internal state
+hold ``L_b``.
 """
 from dataclasses import dataclass
 
@@ -271,8 +273,9 @@ class ExplicitEuler(ExplicitRungeKutta):
 class RK4World(ExplicitRungeKutta):
     """Classical RK4 on Baraff's world-axes ``L``. Order 4.
 
-    Orientation error feeds back into omega: 1000-2500x less accurate than ``rk4`` near the
-    intermediate axis at the same step. Kept to show that cost.
+    Orientation error feeds back into omega, so near the intermediate axis it is far less
+    accurate than ``rk4`` at the same step (docs/accuracy.md, tumbling table). Kept as the
+    textbook formulation, to show that cost.
     """
 
     name = 'rk4_world'
