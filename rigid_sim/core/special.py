@@ -5,9 +5,8 @@
 ``ellipj`` and ``ellipkm1`` are those of ``scipy.special.cython_special``. Carlson's
 symmetric integrals are written out here by his duplication method (B. C. Carlson,
 Numerical Algorithms 10, 1995, as in Numerical Recipes 3rd ed., 6.12): the free flow calls
-three per body and drift, and scipy's measured about twice the time of these for the same
-double-precision result (docs/performance.md); scipy's stay the reference the tests compare
-with.
+three per body and drift, and scipy's cost more for the same double-precision result
+(docs/performance.md has the timings); scipy's stay the reference the tests compare with.
 
 Each C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
