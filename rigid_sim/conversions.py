@@ -78,9 +78,12 @@ class StateMessages:
 
     Parameters
     ----------
-    bodies : sequence of N scene BodySpec
-    world_frame : str, frame_id of every pose
-    frame_prefix : str, prefixed to the body frames (odometry child, transforms)
+    bodies : sequence of BodySpec
+        The scene's N bodies, in scene order.
+    world_frame : str
+        The frame_id of every pose and world-axes twist.
+    frame_prefix : str
+        Prefixed to the body frames (odometry child, transforms).
 
     Attributes
     ----------

@@ -26,7 +26,8 @@ class TfOutput:
 
     Parameters
     ----------
-    node : rigid_sim.node.RigidSimNode, creates the publishers through its ``qos_overrides``
+    node : rigid_sim.node.RigidSimNode
+        Creates the publishers through its ``qos_overrides``.
     """
 
     def __init__(self, node):

@@ -107,8 +107,11 @@ class StepGuard:
     Parameters
     ----------
     bodies : RigidBodies
-    effects : the world's effects (each declares its ``fastest_rate`` and ``torqued``)
-    inputs : AppliedWrenches, the world's inputs: they torque only the bodies holding one
+        The bodies the world advances.
+    effects : sequence of Effect
+        The world's effects; each declares its ``fastest_rate`` and ``torqued``.
+    inputs : AppliedWrenches
+        The world's inputs; they torque only the bodies holding one.
     """
 
     def __init__(self, bodies, effects, inputs):

@@ -146,8 +146,11 @@ class Snapshot:
     Parameters
     ----------
     bodies : RigidBodies
-    y : (N, 13) float, packed state [x, q, P, L]
-    time : float, s
+        The bodies the state belongs to.
+    y : (N, 13) float
+        Packed state [x, q, P, L], world frame.
+    time : float
+        Simulated time of the state, s.
     """
 
     def __init__(self, bodies, y, time):

@@ -24,13 +24,19 @@ class World:
     Parameters
     ----------
     bodies : RigidBodies
-    initial : (N, 13) float, packed Baraff state at time 0
-    effects : list of effects (see :mod:`rigid_sim.core.effects`); only what the scene lists
-    integrator : str, a registered integrator name
-    tolerance : float, error target of adaptive integrators
-    auto_substep : bool, split steps that exceed the integrator's bounds
-        (:mod:`rigid_sim.core.safeguards`); False runs the bare method, as benchmarks of the
-        methods themselves need. Non-finite steps are rejected either way.
+        Masses, body-frame inertias and centres of mass of the N bodies.
+    initial : (N, 13) float
+        Packed Baraff state [x, q, P, L] at time 0, world frame.
+    effects : sequence of Effect
+        The scene's effects (see :mod:`rigid_sim.core.effects`); only what the scene lists.
+    integrator : str
+        A registered integrator name.
+    tolerance : float
+        Error target of adaptive integrators (relative, per component of the scaled state).
+    auto_substep : bool
+        Split steps that exceed the integrator's bounds (:mod:`rigid_sim.core.safeguards`);
+        False runs the bare method, as benchmarks of the methods themselves need. Non-finite
+        steps are rejected either way.
     inputs : AppliedWrenches, optional
         The wrenches held on the bodies; by default none of them takes wrench input.
     """
