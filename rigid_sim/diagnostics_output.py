@@ -22,7 +22,8 @@ class DiagnosticsOutput:
     publish : callable
         Called without arguments once per ``PERIOD``: the node's report, which calls
         :meth:`publish`.
-    sim_time : float, s, when the first window starts
+    sim_time : float
+        Simulated time when the first window starts, s.
     """
 
     def __init__(self, node, publish, sim_time):

@@ -22,8 +22,11 @@ class ImuOutputs:
     node : rigid_sim.node.RigidSimNode
         Creates (through its ``qos_overrides``) and destroys the publishers.
     scene : rigid_sim.core.scene.Scene
-    world : rigid_sim.core.world.World of that scene
-    frame_prefix : str, prefixed to the IMU frames
+        The scene whose bodies may carry IMUs.
+    world : rigid_sim.core.world.World
+        The world of that scene, whose state the IMUs read.
+    frame_prefix : str
+        Prefixed to the IMU frames.
     """
 
     def __init__(self, node, scene, world, frame_prefix):

@@ -89,8 +89,8 @@ def executable():
 
     Everything the node holds is released by then; what the interpreter would still do is
     unload numpy, scipy and rclpy object by object, which takes longer than all of the
-    node's own shutdown (about half a second): the exit handlers run, the output is
-    flushed and the process ends with the status.
+    node's own shutdown: the exit handlers run, the output is flushed and the process ends
+    with the status.
     """
     status = main()
     atexit._run_exitfuncs()

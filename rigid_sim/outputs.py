@@ -3,11 +3,11 @@
 """The node's state outputs: per-body publishers, who listens to them, what they send.
 
 Outputs nobody subscribes to are neither filled nor sent. Who listens is asked again every
-``LISTENER_REFRESH`` seconds of wall time, not on every tick, because asking costs about a
-microsecond and a half per topic. A scene of more than ``per_body_limit`` bodies starts
-without per-body publishers (30 000 of them took minutes to make and stalled the executor):
-each is made at such a refresh once a subscriber to its topic appears in the graph; the
-PoseArray and the markers are always there.
+``LISTENER_REFRESH`` seconds of wall time, not on every tick, because asking is a graph query
+per topic, which at thousands of topics would cost more than the tick. A scene of more than
+``per_body_limit`` bodies starts without per-body publishers (many thousands of them stall
+start-up and the executor, see docs/ros_notes.md): each is made at such a refresh once a
+subscriber to its topic appears in the graph; the PoseArray and the markers are always there.
 """
 import math
 import time

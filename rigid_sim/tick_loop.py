@@ -33,7 +33,8 @@ class TickLoop:
         Owns the timer.
     tick : callable
         One tick of the simulation.
-    rate : float, Hz; 0 ticks as fast as the CPU allows
+    rate : float
+        Ticks per second of wall time, Hz; 0 ticks as fast as the CPU allows.
     """
 
     def __init__(self, node, tick, rate):

@@ -86,10 +86,12 @@ def test_a_run_the_world_gave_up_on_is_scored_diverged_in_every_column():
 
 
 def test_mujoco_runs_the_torqued_cases_as_specified():
-    """MuJoCo's RK4 on the spring (slide joints with stiffness and damping, a ball joint) and
-    on the offset force (a site actuator in world axes) converges to the same oracles as our
-    methods: at dt = 1e-3 a fourth-order method errs ~1e-11 over these 10 s, and ten times
-    the step gives ~1e4 times the error."""
+    """The torqued cases in MuJoCo's RK4 converge to the same oracles as our methods.
+
+    The spring is slide joints with stiffness and damping plus a ball joint; the offset
+    force is a site actuator in world axes. At dt = 1e-3 a fourth-order method errs ~1e-11
+    over these 10 s, and ten times the step gives ~1e4 times the error.
+    """
     from rigid_sim.bench import mujoco_baseline
     for key, kind in (('spring', 'position'), ('offset_force', 'orientation')):
         case = CASES_BY_KEY[key]

@@ -11,9 +11,11 @@ from rigid_sim.core.warm_up import warm_up
 
 
 def test_warm_up_leaves_the_world_as_it_was():
-    """warm_up compiles or loads every kernel a world uses and reports the seconds it took,
-    without moving the world: state, time, counters and diagnostics stay as they were, and
-    the next step is the step an unwarmed twin takes."""
+    """Warming up compiles or loads every kernel a world uses without moving the world.
+
+    warm_up reports the seconds it took; state, time, counters and diagnostics stay as they
+    were, and the next step is the step an unwarmed twin takes.
+    """
     def build():
         bodies = cases.make_bodies(1.5, np.diag([0.3, 0.5, 0.7]))
         inputs = AppliedWrenches(bodies)
@@ -35,8 +37,11 @@ def test_warm_up_leaves_the_world_as_it_was():
 
 
 def test_every_integrator_carries_its_own_step_bound():
-    """Each registered method declares the bound the guard splits its steps by: positive
-    numbers (inf: unbounded), and the exact-flow splittings leave torque-free bodies out."""
+    """Each registered method declares the bound the guard splits its steps by.
+
+    The bounds are positive (inf: unbounded), and the exact-flow splittings leave
+    torque-free bodies out.
+    """
     for name, cls in REGISTRY.items():
         bound = cls.bound
         assert bound.oscillation > 0.0 and bound.rotation > 0.0, name
@@ -46,9 +51,12 @@ def test_every_integrator_carries_its_own_step_bound():
 
 
 def test_carlson_integrals_match_scipy():
-    """R_F and R_J written out by Carlson's duplication agree with scipy's to round-off over
-    the arguments the free flow passes (x, y in [0, 1], y down to 1e-30, z = 1, p > 1), and
-    R_F(x, y, z) keeps its closed forms: R_F(x, x, x) = x^-1/2, R_F(0, 1, 1) = pi / 2."""
+    """R_F and R_J by Carlson's duplication agree with scipy's and keep their closed forms.
+
+    Agreement is to round-off over the arguments the free flow passes (x, y in [0, 1], y down
+    to 1e-30, z = 1, p > 1); the closed forms are R_F(x, x, x) = x^-1/2 and
+    R_F(0, 1, 1) = pi / 2.
+    """
     from scipy import special as reference
     from rigid_sim.core.special import elliprf, elliprj
     rng = np.random.default_rng(3)

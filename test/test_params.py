@@ -159,7 +159,7 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
 
 
-# (name, value, reason): values a runtime change used to get through.
+# (name, value, reason): hostile values a runtime change must refuse, and the reason given.
 HOSTILE = [
     ('world_frame', 'bad frame!', 'no frame name'), ('world_frame', 'w' * 100_000, 'no frame'),
     ('time_step', 1e-300, 'outside the range'), ('substeps', 10_000, 'outside the range'),

@@ -264,7 +264,8 @@ MISTAKES = [  # (change, key path named, reason)
     (put('effects', 'damping', 'linear', -0.1), 'effects.damping.linear', 'non-negative'),
     (put('world_frame', 'ball'), 'bodies[1].name', "body name 'ball' is the world_frame"),
     (put(*B0, 'points', 'ball', [0, 0, 0]), 'bodies[0].points.ball', 'already a frame name'),
-    (put(*B0, 'points', 'world', [0, 0, 0]), 'bodies[0].points.world', 'already a frame'),
+    (put(*B0, 'points', 'world', [0, 0, 0]), 'bodies[0].points.world',
+     "point 'world' of body 'box' is named like the world_frame"),
     (put(*B0, 'pose', 'orientation', [0, 0, 0, 0]), 'bodies[0].pose.orientation',
      'zero quaternion'),
     (put(*B0, 'pose', 'orientation', [0, 0, 1]), 'bodies[0].pose.orientation', 'list of 4'),
@@ -369,14 +370,47 @@ def test_wrench_target_refuses_unknown_frames(frame_id, reason):
 
 
 @pytest.mark.parametrize('world_frame, body', [('box', 'box'), ('box/thruster', 'box'),
-                                               ('ball', 'ball')])
+                                               ('thruster', 'box'), ('ball', 'ball')])
 def test_world_frame_naming_a_body_frame_is_refused(world_frame, body):
-    """A world_frame that is also a body or point frame would give frame_id two meanings."""
+    """A world_frame that is also a body or point name would give frame_id two meanings."""
     scene = parse_scene(copy.deepcopy(VALID))
     with pytest.raises(ValueError, match=f"world_frame '{world_frame}' is a frame of body "
                                          f"'{body}'"):
         check_world_frame(scene, world_frame)
     check_world_frame(scene, 'map')   # any other name is fine
+
+
+# Names of the VALID scene's frames ('box' has the point 'thruster'), and names that are not.
+CLASHING = ['box', 'ball', 'thruster', 'box/thruster']
+FREE = ['map', 'odom', 'ball/thruster', 'box/nozzle']
+
+
+@pytest.mark.parametrize('name', CLASHING + FREE)
+def test_scene_loader_and_runtime_world_frame_refuse_the_same_names(name):
+    """The loader and the world_frame parameter refuse a name exactly when it is a frame.
+
+    A scene's own world_frame is one name token, so names with a / are compared at runtime
+    only; every other name is refused by both or by neither.
+    """
+    scene = parse_scene(copy.deepcopy(VALID))
+    runtime_refused = True
+    try:
+        check_world_frame(scene, name)
+    except ValueError:
+        pass
+    else:
+        runtime_refused = False
+    assert runtime_refused == (name in CLASHING)
+    if '/' in name:
+        return
+    loader_refused = True
+    try:
+        parse_scene(scene_with(put('world_frame', name)), path='bad.yaml')
+    except SceneError as error:
+        assert 'world_frame' in str(error)
+    else:
+        loader_refused = False
+    assert loader_refused == runtime_refused
 
 
 def test_open_mesh_is_refused(tmp_path):

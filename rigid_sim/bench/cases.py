@@ -76,7 +76,7 @@ class Case:
                      auto_substep=False, inputs=inputs)
 
     def _effects_and_inputs(self, bodies):
-        """The case's effects and its held wrenches (None: no input)."""
+        """Build the case's effects and its held wrenches (None: no input)."""
         if self.key == 'spring':
             spec = SpringSpec(body=0, point=np.zeros(3), stiffness=SPRING_STIFFNESS,
                               damping=SPRING_DAMPING, anchor=np.zeros(3))

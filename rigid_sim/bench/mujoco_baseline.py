@@ -47,7 +47,7 @@ PUSH = ('<actuator><general site="point" refsite="world_axes" gear="{gear} 0 0 0
 
 
 def model_xml(case):
-    """The MJCF of ``case``: a free body, a sprung one or a pushed one."""
+    """Write the MJCF of ``case``: a free body, a sprung one or a pushed one."""
     joints, actuators = FREE, ''
     if case.key == 'spring':
         joints = SPRUNG
@@ -122,8 +122,11 @@ def initial_translation(case):
 
 
 def case_energy(case, position, omega_body, velocity, matrix):
-    """The energy ``case`` tracks (see ``Case.energy``), J: kinetic, plus the spring's
-    potential, or minus the work potential ``F.(x + R r)`` of the held push."""
+    """Compute the energy ``case`` tracks (see ``Case.energy``), J.
+
+    Kinetic energy, plus the spring's potential, or minus the work potential
+    ``F.(x + R r)`` of the held push.
+    """
     energy = 0.5 * omega_body @ (MOMENTS * omega_body) + 0.5 * MASS * velocity @ velocity
     if case.key == 'spring':
         energy += 0.5 * SPRING_STIFFNESS * position @ position

@@ -57,7 +57,7 @@ QUICK = dict(configs=(Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
 # Scenes (N bodies, every one taking wrenches) the executable is started and stopped on.
 START_SIZES = (1000, 10_000)
 START_TIMEOUT = 120.0   # s
-# The issue's node goals: (N, what is listened, wording), all with 1 kHz physics.
+# The node's real-time goals: (N, what is listened, wording), all with 1 kHz physics.
 GOAL_PHYSICS_STEP = 1e-3   # s
 GOALS = ((100, 'bodies', '100 bodies, per-body pose and twist at 100 Hz, 1 kHz physics'),
          (1000, 'poses', '1000 bodies, PoseArray at 50 Hz, 1 kHz physics'))
@@ -268,7 +268,7 @@ def physics_step(config):
 
 
 def goals(results):
-    """Markdown lines: each of the issue's node goals, met or not, with the numbers."""
+    """Return Markdown lines: each real-time goal, met or not, with the numbers."""
     lines = []
     for bodies, listened, wording in GOALS:
         runs = [r for r in results
@@ -312,7 +312,8 @@ def report(results, seconds, starts=()):
         '(per-body topics made on demand above `per_body_topics_limit`). Start: process '
         'creation to the log line that it simulates; stop: SIGINT to the end of the process.',
         '', start_table(starts),
-        '', f'### Goals of issue 6 (met: real-time factor >= {GOAL_RTF}; a wall-clock timer '
+        '', f'### Real-time goals with 1 kHz physics (met: real-time factor >= {GOAL_RTF}; a '
+        'wall-clock timer '
         'cannot average above 1, and window edges move it by ~1e-3; only rows whose '
         f'integrator steps are <= {1e3 * GOAL_PHYSICS_STEP:g} ms count as 1 kHz physics)',
         *goals(results)])

@@ -65,7 +65,7 @@ def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):
 
 
 def pushed(force, point, max_force=1e4, max_torque=1e4, expires=np.inf):
-    """Inputs builder: a world-axes ``force`` held at body point ``point``, until ``expires``."""
+    """Make an inputs builder: world-axes ``force`` at body point ``point`` until ``expires``."""
     def make(bodies):
         wrenches = AppliedWrenches(bodies, max_force, max_torque)
         wrenches.hold(0, 'push', 'world_point', force, point=point, expires=expires)

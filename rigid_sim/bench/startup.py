@@ -55,7 +55,7 @@ def measure(integrators, repeats):
 
 
 def report(results):
-    """The Markdown section: setup and one row per integrator."""
+    """Format the Markdown section: setup and one row per integrator."""
     rows = [[name, f'{cold[0]:.2f}', f'{cold[1]:.2f}', f'{cached[0]:.2f}', f'{cached[1]:.2f}']
             for name, (cold, cached) in results.items()]
     machine = [line for line in bench.machine_description() if 'CPU time' not in line]

@@ -68,7 +68,7 @@ def bodies_and_state(n):
 
 @functools.lru_cache(maxsize=None)
 def held_wrenches(n):
-    """The world's inputs for N bodies: the same body-frame wrench held on each."""
+    """Build the world's inputs for N bodies: the same body-frame wrench held on each."""
     wrenches = AppliedWrenches(bodies_and_state(n)[0])
     for i in range(n):
         wrenches.hold(i, 'bench', 'body', FORCE, TORQUE)
@@ -136,7 +136,7 @@ def mujoco_time(n, integrator, work, repeats):
 def effect_costs(n, repeats):
     """CPU seconds of one compiled wrench sum of each effect alone at N bodies, per kind.
 
-    Each call from Python includes numba's dispatch (~1 us), which a step pays once per
+    Each call from Python includes numba's dispatch, which a step pays once per
     stage for all its effects together, not per effect.
     """
     bodies, y = bodies_and_state(n)

@@ -43,7 +43,9 @@ class NoisySensor:
     Parameters
     ----------
     noise : SensorNoise
-    rng : numpy.random.Generator, this sensor's own stream
+        White-noise and bias parameters of the sensor.
+    rng : numpy.random.Generator
+        This sensor's own random stream.
     """
 
     def __init__(self, noise, rng):

@@ -222,7 +222,7 @@ def _geometry(solid):
     if isinstance(solid, trimesh.Trimesh):
         _check_closed(solid)
         # Rays nearly along z have thin bounding boxes, so rtree (a dependency) culls almost
-        # every triangle: ~40x faster than mesh.contains' oblique default direction.
+        # every triangle, where mesh.contains' oblique default direction culls few.
         return solid.bounds, solid.volume, lambda p: ray_util.contains_points(
             solid.ray, p, check_direction=RAY_DIRECTION)
     volume = _primitive(solid, density=1.0).mass
@@ -262,8 +262,8 @@ def bounding_box_estimate(solid, mass=None, density=None):
 def _unit_points(samples, sequence, seed):
     """Points in the unit cube, (n, 3); Sobol rounds ``samples`` up to a power of two."""
     if sequence == 'sobol':
-        # Imported here: scipy.stats takes most of the node's start-up import time (0.9 of
-        # 1.3 s), and only the sampling estimate needs it.
+        # Imported here: scipy.stats takes most of the node's start-up import time, and only
+        # the sampling estimate needs it.
         from scipy.stats import qmc
         # Sobol points are balanced only in blocks of 2^m, and scipy warns otherwise.
         # seed=, not rng=: older scipy (ROS distributions) has only seed.

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Inputs of a world: wrenches applied from outside, held until replaced or timed out.
 
 They come from users (commands), not from the scene, so they are not an effect: the world
@@ -34,7 +36,7 @@ DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
 DEFAULT_MAX_TORQUE = 1.0e4  # N m
 # Simulated time is a running sum of float steps (ten steps of 0.01 s end 1e-17 s short of
 # 0.1), so a hold ends at the step that reaches its end to within this: a ROS stamp's
-# resolution. Without it a 0.1 s hold at 0.01 s steps acted 0.11 s.
+# resolution. Without it a hold whose end falls on a step would act one step too long.
 EXPIRY_SLACK = 1e-9   # s
 
 
@@ -191,7 +193,7 @@ class AppliedWrenches:
         self._body_held[body] = any(held.frame == 'body' for held in (wrenches or {}).values())
 
     def _refresh(self):
-        """The kernel's arrays after the world_point holdings changed (the sums stay)."""
+        """Rebuild the kernel's arrays after the world_point holdings changed (the sums stay)."""
         at_points = list(self._at_points.values())
         self._parameters = WrenchInputs(
             self._sums['world'], self._sums['body'], self._body_held,
@@ -202,7 +204,7 @@ class AppliedWrenches:
 
     @property
     def parameters(self):
-        """The :class:`WrenchInputs` the compiled kernel reads."""
+        """Return the :class:`WrenchInputs` the compiled kernel reads."""
         if self._points_stale:
             self._refresh()
         return self._parameters

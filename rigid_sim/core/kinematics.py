@@ -88,7 +88,7 @@ def normalize(q):
 
 @njit(cache=True)
 def exp_map(v):
-    """Unit quaternion of the rotation vector ``v`` (axis times angle, rad)."""
+    """Return the unit quaternion (x, y, z, w) of rotation vector ``v`` (axis times angle, rad)."""
     angle = math.sqrt(dot(v, v))
     half = 0.5 * angle
     # sin(a/2) / a without a branch cut at zero: its series to the round-off of the angle.
@@ -121,9 +121,17 @@ def angular_velocity(r, inertia_inv, angular_momentum):
 
     Parameters
     ----------
-    r : 9-tuple, ``R`` body to world
-    inertia_inv : (3, 3) float, ``I_body^-1``, 1/(kg m^2)
-    angular_momentum : 3-tuple, world ``L``, kg m^2/s
+    r : 9-tuple of float
+        Rotation matrix ``R``, body to world, row-major.
+    inertia_inv : (3, 3) float
+        Inverse body-frame inertia ``I_body^-1``, 1/(kg m^2).
+    angular_momentum : 3-tuple of float
+        Angular momentum ``L``, kg m^2/s, world axes.
+
+    Returns
+    -------
+    3-tuple of float
+        Angular velocity, rad/s, world axes.
     """
     return rotate(r, apply(inertia_inv, rotate_inverse(r, angular_momentum)))
 

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Step safeguards: substeps within each method's bounds, and no non-finite state, ever.
 
 Before a step the world asks :class:`StepGuard` how many equal substeps keep the chosen
@@ -28,9 +30,11 @@ ENERGY_RTOL = 1e-3
 # energy swings by (w h)^2 / 4 of it (at the turning points), so w h <= 2 sqrt(ENERGY_RTOL / 2)
 # spends half the budget. A torque turning with the body errs the same way in |omega| h.
 STRANG_BOUND = 2.0 * math.sqrt(0.5 * ENERGY_RTOL)
-# Yoshida's triple jump of Strang steps: energy swings by 0.076 (w h)^4 (measured on the
-# harmonic oscillator for w h <= 0.3); half the budget at w h = (ENERGY_RTOL / 0.152)^(1/4).
-YOSHIDA_BOUND = (ENERGY_RTOL / 0.152) ** 0.25
+# Yoshida's triple jump of Strang steps: the energy swings by YOSHIDA_SWING (w h)^4, a
+# coefficient measured on the harmonic oscillator (docs/stability.md, "Bounds", says how), so
+# w h = (ENERGY_RTOL / (2 YOSHIDA_SWING))^(1/4) spends half the budget.
+YOSHIDA_SWING = 0.076
+YOSHIDA_BOUND = (ENERGY_RTOL / (2.0 * YOSHIDA_SWING)) ** 0.25
 # Stability limits with a 10 % margin: RK4 on an oscillator needs w h < 2 sqrt(2), symplectic
 # Euler w h < 2. Both methods drift in energy at any step, so these bound stability only.
 RK4_BOUND = 0.9 * 2.0 * math.sqrt(2.0)
@@ -90,7 +94,7 @@ def check_time_step(dt):
 
 
 def failure_message(code, substeps, h):
-    """What an integrator's failure ``code`` (see ``Integrator.advance``) met, in words."""
+    """Describe in words what an integrator's failure ``code`` (see ``Integrator.advance``) met."""
     where = f'substep {abs(code)}/{substeps} of {h:.3g} s'
     if code > 0:
         return f'non-finite state in {where}'
@@ -103,8 +107,11 @@ class StepGuard:
     Parameters
     ----------
     bodies : RigidBodies
-    effects : the world's effects (each declares its ``fastest_rate`` and ``torqued``)
-    inputs : AppliedWrenches, the world's inputs: they torque only the bodies holding one
+        The bodies the world advances.
+    effects : sequence of Effect
+        The world's effects; each declares its ``fastest_rate`` and ``torqued``.
+    inputs : AppliedWrenches
+        The world's inputs; they torque only the bodies holding one.
     """
 
     def __init__(self, bodies, effects, inputs):

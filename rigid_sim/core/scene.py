@@ -197,23 +197,55 @@ def _bodies(entries, world_frame, budget):
         raise Mistake('bodies', f'{len(entries)} bodies, above the limit of '
                                 f'{budget.limits["max_bodies"]} (raise limits.max_bodies)')
     bodies = tuple(_body(entry, f'bodies[{i}]', budget) for i, entry in enumerate(entries))
+    clash = world_frame_clash(bodies, world_frame)
+    if clash is not None:
+        index, point, reason = clash
+        raise Mistake(f'bodies[{index}].name' if point is None
+                      else f'bodies[{index}].points.{point}', reason)
     names = [body.name for body in bodies]
     first = {}
     for i, name in enumerate(names):
-        # A wrench's frame_id names world axes or a body's axes; one name cannot be both.
-        if name == world_frame:
-            raise Mistake(f'bodies[{i}].name', f'body name {name!r} is the world_frame')
         if name in first:
             raise Mistake(f'bodies[{i}].name', f'duplicate body name {name!r} '
                                                f'(also bodies[{first[name]}])')
         first[name] = i
-    frames = set(names) | {world_frame}
     for i, body in enumerate(bodies):
         for point in body.points:
-            if point in frames:
+            if point in first:
                 raise Mistake(f'bodies[{i}].points.{point}', f'point name {point!r} is '
-                              'already a frame name (a body or the world_frame)')
+                              'already a frame name (a body)')
     return bodies
+
+
+def world_frame_clash(bodies, world_frame):
+    """Find the first name of ``bodies`` that ``world_frame`` would also be.
+
+    A wrench's frame_id names world axes, a body's axes or one of its points, so the
+    world_frame may be neither a body name nor a point frame ``<body>/<point>``; nor a bare
+    point name, so that a name means one thing wherever it appears. The scene loader and the
+    node's world_frame parameter both refuse by this one rule.
+
+    Parameters
+    ----------
+    bodies : sequence of BodySpec
+        The scene's bodies, with their named points.
+    world_frame : str
+        The name proposed for the fixed frame.
+
+    Returns
+    -------
+    tuple of (int, str or None, str) or None
+        Index of the body, the point's name (None for the body's own name) and the reason;
+        None when ``world_frame`` names none of them.
+    """
+    for index, body in enumerate(bodies):
+        if world_frame == body.name:
+            return index, None, f'body name {body.name!r} is the world_frame'
+        for point in body.points:
+            if world_frame in (point, f'{body.name}/{point}'):
+                return index, point, (f'point {point!r} of body {body.name!r} is named like '
+                                      'the world_frame')
+    return None
 
 
 def _end_in_world(body, point):
@@ -324,15 +356,17 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
 
 
 def check_world_frame(scene, world_frame):
-    """Raise ValueError if ``world_frame`` is also a body or point frame of ``scene``.
+    """Raise ValueError if ``world_frame`` is also a body or point name of ``scene``.
 
-    A wrench's ``frame_id`` would then name both world axes and a body's, so the node
-    refuses such a ``world_frame`` as the scene loader refuses such a body or point name.
+    The rule is :func:`world_frame_clash`'s, the one the scene loader applies, so a
+    ``world_frame`` set at runtime is refused exactly where a scene naming it would be.
     """
-    for body in scene.bodies:
-        if world_frame in [body.name] + [f'{body.name}/{point}' for point in body.points]:
-            raise ValueError(f'world_frame {shown(world_frame)} is a frame of body {body.name!r} '
-                             f'in {scene.path}: a wrench frame_id would mean both')
+    clash = world_frame_clash(scene.bodies, world_frame)
+    if clash is not None:
+        index, _, reason = clash
+        raise ValueError(f'world_frame {shown(world_frame)} is a frame of body '
+                         f'{scene.bodies[index].name!r} in {scene.path} ({reason}): a wrench '
+                         'frame_id would mean both')
 
 
 def wrench_target(body, frame_id, world_frame):

@@ -26,7 +26,7 @@ MAX_NODES = 2_000_000       # YAML nodes, an alias counting as the node it repea
 YAML12_FLOAT = re.compile(r'''^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
                              |[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$''', re.X)
 FLOAT_TAG = 'tag:yaml.org,2002:float'
-_BASE = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)  # libyaml: ~10x faster
+_BASE = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)  # libyaml's C parser when built
 
 
 class FileRefused(ValueError):

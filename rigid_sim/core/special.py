@@ -5,9 +5,8 @@
 ``ellipj`` and ``ellipkm1`` are those of ``scipy.special.cython_special``. Carlson's
 symmetric integrals are written out here by his duplication method (B. C. Carlson,
 Numerical Algorithms 10, 1995, as in Numerical Recipes 3rd ed., 6.12): the free flow calls
-three per body and drift, and scipy's measured about twice the time of these for the same
-double-precision result (docs/performance.md); scipy's stay the reference the tests compare
-with.
+three per body and drift, and scipy's cost more for the same double-precision result
+(docs/performance.md has the timings); scipy's stay the reference the tests compare with.
 
 Each C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
@@ -57,7 +56,7 @@ def _four_doubles(typingctx):
 
 @intrinsic
 def _load(typingctx, pointer):
-    """The double ``pointer`` points to."""
+    """Load the double that ``pointer`` points to."""
     def codegen(context, builder, sig, args):
         """Load through the pointer."""
         return builder.load(args[0])
@@ -112,8 +111,10 @@ def _elliprc(x, y):
 
 @njit(cache=True)
 def elliprj(x, y, z, p):
-    """Carlson's symmetric integral ``R_J(x, y, z, p)``, x, y, z >= 0 (one zero at most),
-    p > 0."""
+    """Evaluate Carlson's symmetric integral ``R_J(x, y, z, p)``.
+
+    Defined for x, y, z >= 0 with at most one of them zero, and p > 0.
+    """
     if (x == 0.0) + (y == 0.0) + (z == 0.0) > 1:
         return math.inf
     total, factor = 0.0, 1.0

@@ -67,7 +67,7 @@ class RigidBodies:
 
     @property
     def count(self):
-        """Number of bodies N."""
+        """Return the number of bodies N."""
         return len(self.names)
 
     @cached_property
@@ -77,7 +77,7 @@ class RigidBodies:
 
     @cached_property
     def model(self):
-        """The :class:`Model` of these bodies."""
+        """Return the :class:`Model` (static arrays for the kernels) of these bodies."""
         moments, axes = self.principal_moments
         return Model(np.ascontiguousarray(self.inverse_mass),
                      np.ascontiguousarray(self.inertia_body_inv), np.ascontiguousarray(moments),
@@ -146,8 +146,11 @@ class Snapshot:
     Parameters
     ----------
     bodies : RigidBodies
-    y : (N, 13) float, packed state [x, q, P, L]
-    time : float, s
+        The bodies the state belongs to.
+    y : (N, 13) float
+        Packed state [x, q, P, L], world frame.
+    time : float
+        Simulated time of the state, s.
     """
 
     def __init__(self, bodies, y, time):

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The world: a static model, the packed state, its inputs, the scene's effects, one integrator.
 
 As a compiled engine separates model, data and inputs, the World keeps apart what never
@@ -22,13 +24,19 @@ class World:
     Parameters
     ----------
     bodies : RigidBodies
-    initial : (N, 13) float, packed Baraff state at time 0
-    effects : list of effects (see :mod:`rigid_sim.core.effects`); only what the scene lists
-    integrator : str, a registered integrator name
-    tolerance : float, error target of adaptive integrators
-    auto_substep : bool, split steps that exceed the integrator's bounds
-        (:mod:`rigid_sim.core.safeguards`); False runs the bare method, as benchmarks of the
-        methods themselves need. Non-finite steps are rejected either way.
+        Masses, body-frame inertias and centres of mass of the N bodies.
+    initial : (N, 13) float
+        Packed Baraff state [x, q, P, L] at time 0, world frame.
+    effects : sequence of Effect
+        The scene's effects (see :mod:`rigid_sim.core.effects`); only what the scene lists.
+    integrator : str
+        A registered integrator name.
+    tolerance : float
+        Error target of adaptive integrators (relative, per component of the scaled state).
+    auto_substep : bool
+        Split steps that exceed the integrator's bounds (:mod:`rigid_sim.core.safeguards`);
+        False runs the bare method, as benchmarks of the methods themselves need. Non-finite
+        steps are rejected either way.
     inputs : AppliedWrenches, optional
         The wrenches held on the bodies; by default none of them takes wrench input.
     """
@@ -66,11 +74,11 @@ class World:
         self._spare = None
 
     def effect(self, kind):
-        """The effect of class ``kind`` in this world, or None when the scene has none."""
+        """Return the effect of class ``kind`` in this world, or None when the scene has none."""
         return next((e for e in self.effects if isinstance(e, kind)), None)
 
     def effect_parameters(self):
-        """The parameters the compiled wrench sum reads: each effect's, then the inputs'."""
+        """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
         return self._effect_parameters + (self.inputs.parameters,)
 
     def reset(self):
@@ -132,7 +140,7 @@ class World:
         return self._guard.plan(self.integrator, y, dt, current)
 
     def _attempt(self, dt, substeps):
-        """The state after ``dt``, halving the substeps on a non-finite value; None if all fail."""
+        """Step by ``dt``, halving the substeps on a non-finite state; None if every try fails."""
         for halving in range(safeguards.MAX_HALVINGS + 1):
             pieces = substeps << halving
             y = self._scratch()
@@ -149,7 +157,7 @@ class World:
         return None
 
     def _scratch(self):
-        """An (N, 13) array to step into.
+        """Return an (N, 13) array to step into.
 
         The state the last step replaced, when no one else holds it (a fresh array at large N
         costs page faults), else a new one.

@@ -45,11 +45,11 @@ class Effect:
 
     @property
     def parameters(self):
-        """The NamedTuple of arrays its registered kernel reads."""
+        """Return the NamedTuple of arrays the effect's registered kernel reads."""
         raise NotImplementedError
 
     def potential_energy(self, snapshot):
-        """Stored energy at ``snapshot``, J (0: dissipative or external)."""
+        """Return the energy the effect stores at ``snapshot``, J (0: dissipative or external)."""
         return 0.0
 
     def fastest_rate(self):
@@ -73,16 +73,22 @@ def _apply_one_overload(parameters, y, time, model, force, torque):
 
 @njit(cache=True)
 def accumulate(effects, y, time, model, force, torque):
-    """Net wrench of every effect in ``effects`` into ``force`` and ``torque``.
+    """Write the net wrench of every effect in ``effects`` into ``force`` and ``torque``.
 
     Parameters
     ----------
-    effects : tuple of the effects' parameter NamedTuples; never empty (the world's inputs
-        come last)
-    y : (N, 13) float, packed state [x, q, P, L], world axes
-    time : float, s
-    model : Model, the bodies' static arrays
-    force, torque : (N, 3) float, overwritten: world axes, about each centre of mass, N and N m
+    effects : tuple of NamedTuple
+        The effects' parameters; never empty (the world's inputs come last).
+    y : (N, 13) float
+        Packed state [x, q, P, L], world frame.
+    time : float
+        Simulated time, s.
+    model : Model
+        The bodies' static arrays.
+    force : (N, 3) float
+        Overwritten with the net force on each body, N, world axes.
+    torque : (N, 3) float
+        Overwritten with the net torque about each centre of mass, N m, world axes.
     """
     force[:, :] = 0.0
     torque[:, :] = 0.0

@@ -34,11 +34,11 @@ class Damping(Effect):
 
     @property
     def parameters(self):
-        """The :class:`DampingParameters` of the kernel."""
+        """Return the :class:`DampingParameters` the compiled kernel reads."""
         return DampingParameters(self.linear, self.angular)
 
     def fastest_rate(self):
-        """The faster of the two decay rates, 1/s."""
+        """Return the faster of the two decay rates, 1/s."""
         return max(self.linear, self.angular)
 
 

@@ -26,7 +26,7 @@ class Gravity(Effect):
 
     @property
     def parameters(self):
-        """The :class:`GravityParameters` of the kernel."""
+        """Return the :class:`GravityParameters` the compiled kernel reads."""
         return GravityParameters(self._weight)
 
     def potential_energy(self, snapshot):

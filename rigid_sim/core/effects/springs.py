@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Linear springs with dampers between body points and world anchors or other bodies.
 
 Each spring pulls its two attachment points together with
@@ -70,7 +72,7 @@ class Springs(Effect):
 
     @property
     def parameters(self):
-        """The :class:`SpringParameters` of the kernel."""
+        """Return the :class:`SpringParameters` the compiled kernel reads."""
         return self._parameters
 
     def _inverse_effective_mass(self, bodies):

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Adaptive Dormand-Prince 5(4), driven through scipy's RK45 stepper.
 
 The error of each internal step is held below ``tolerance`` relative to a per-component
@@ -36,8 +38,12 @@ class Dopri5(Integrator):
                       self._torque)
 
     def _scale(self, z, dt):
-        """Per-component size (N, 13) of the body-axes state: lengths, 1 for q, momenta of
-        the body's own scale."""
+        """Return the per-component size (N, 13) of the body-axes state ``z``.
+
+        Positions scale with each body's radius of gyration, quaternion components with 1,
+        and momenta with their own size or, at rest, with the body moving its own size in
+        one step ``dt`` (s).
+        """
         momentum = np.linalg.norm(z[:, LINEAR_MOMENTUM], axis=1)
         angular = np.linalg.norm(z[:, ANGULAR_MOMENTUM], axis=1)
         # A body at rest still has a natural momentum: moving its own size in one step.

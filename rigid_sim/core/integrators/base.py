@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The contract every integrator fulfils.
 
 An integrator advances the packed Baraff state ``y`` (N, 13) = [x, q, P, L] of all bodies.

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """The elliptic branch of the exact free flow, in a body's working frame, compiled per body.
 
 See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the working frame
@@ -64,8 +66,11 @@ def _invariants(i, m):
 
 @njit(cache=True)
 def _pi_minus(nu, s, c, dn2, first_kind):
-    """Legendre ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2 from sin, cos and dn^2 of phi;
-    ``first_kind`` is ``F(phi | k^2)``, the Carlson R_F part the two integrals share."""
+    """Evaluate Legendre's ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2.
+
+    ``s``, ``c`` and ``dn2`` are sin, cos and dn^2 of phi; ``first_kind`` is
+    ``F(phi | k^2)``, the Carlson R_F part the two integrals share.
+    """
     return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
 
 
@@ -97,8 +102,10 @@ def _sn_cn_complementary(u, mc):
 
 @njit(cache=True)
 def _sn_cn_first_order(u, mc):
-    """``sn``, ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2), each to its
-    relative accuracy for |u| <= K/2."""
+    """Evaluate ``sn`` and ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2).
+
+    Each is accurate to its own relative precision for |u| <= K/2.
+    """
     sech, tanh = 1.0 / math.cosh(u), math.tanh(u)
     correction = 0.25 * mc * (math.sinh(u) * math.cosh(u) - u) * sech
     return tanh + correction * sech, sech - correction * tanh
@@ -106,9 +113,11 @@ def _sn_cn_first_order(u, mc):
 
 @njit(cache=True)
 def _sn_cn_near_separatrix(v, mc, quarter):
-    """``sn``, ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX, cn to its relative
-    accuracy. Beyond K/2, ``sn(K - w) = cd(w)`` and ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8)
-    give cn as sqrt(mc) times a number of order one, not as the cosine of an angle near pi/2.
+    """Evaluate ``sn`` and ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX.
+
+    cn comes out to its relative accuracy. Beyond K/2, ``sn(K - w) = cd(w)`` and
+    ``cn(K - w) = sqrt(mc) sd(w)`` (A&S 16.8) give cn as sqrt(mc) times a number of order
+    one, not as the cosine of an angle near pi/2.
     """
     far = abs(v) > 0.5 * quarter
     w = quarter - abs(v) if far else abs(v)
@@ -124,8 +133,11 @@ def _sn_cn_near_separatrix(v, mc, quarter):
 
 @njit(cache=True)
 def _jacobi_sn_cn(v, k2, mc, quarter):
-    """``sn``, ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``: scipy's ``ellipj``, or from
-    ``mc`` near the separatrix (on it, mc = 0, ellipj's tanh and sech are exact)."""
+    """Evaluate ``sn`` and ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``.
+
+    scipy's ``ellipj`` away from the separatrix; near it, from ``mc`` (on it, mc = 0,
+    ellipj's tanh and sech are exact).
+    """
     if 0.0 < mc < NEAR_SEPARATRIX:
         return _sn_cn_near_separatrix(v, mc, quarter)
     sn, cn, _ = ellipj(v, k2)
@@ -134,7 +146,7 @@ def _jacobi_sn_cn(v, k2, mc, quarter):
 
 @njit(cache=True)
 def shape_constants(i):
-    """``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments (3-tuple)."""
+    """Return ``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments ``i``."""
     i1, i2, i3 = i
     return math.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1))), i3 * (i2 - i1) / (i1 * (i3 - i2))
 
@@ -145,15 +157,23 @@ def elliptic_working(i, m, time, ratio, nu):
 
     Parameters
     ----------
-    i : 3-tuple, working-frame moments (scaled), ``I1 < I2 < I3`` or reversed
-    m : 3-tuple, angular momentum in the working frame (scaled), ``m1 >= 0``
-    time : float, scaled time
-    ratio, nu : floats from :func:`shape_constants` of ``i``
+    i : 3-tuple of float
+        Principal moments in the working frame, scaled, ``I1 < I2 < I3`` or reversed.
+    m : 3-tuple of float
+        Angular momentum in the working frame, scaled, ``m1 >= 0``.
+    time : float
+        Scaled time of the step.
+    ratio : float
+        ``a1 / a2`` of ``i``, from :func:`shape_constants`.
+    nu : float
+        Characteristic of the third-kind integral, from :func:`shape_constants` of ``i``.
 
     Returns
     -------
-    m : 3-tuple, after ``time``
-    core : 4-tuple quaternion (x, y, z, w), the working-frame rotation of the step
+    m : 3-tuple of float
+        The angular momentum after ``time``, working frame.
+    core : 4-tuple of float
+        Quaternion (x, y, z, w) of the step's rotation in the working frame.
     """
     k2, mc, amp, rate = _invariants(i, m)
     h = math.hypot(ratio * m[1], m[0])

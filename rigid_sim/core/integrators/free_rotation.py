@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Exact torque-free motion of N rigid bodies (Jacobi elliptic functions, Carlson forms).
 
 Quaternions are scalar-last ``(x, y, z, w)`` and map principal body axes to world axes.
@@ -86,7 +88,7 @@ def _flow_all(moments, m, q, dt):
 
 @njit(cache=True)
 def _sorted_axes(i):
-    """Indices (3-tuple) that sort the moments ``i`` ascending, ties in their given order."""
+    """Return the indices (3-tuple) that sort the moments ``i`` ascending, ties kept in order."""
     a, b, c = 0, 1, 2
     if i[b] < i[a]:
         a, b = b, a
@@ -127,7 +129,7 @@ def free_flow(moments, m, q, dt):
 
 @njit(cache=True)
 def _symmetric(mom, order, s, equal_12, equal_23, saddle, m, time):
-    """The closed form of a symmetric top, or of a spin about the intermediate axis."""
+    """Step a symmetric top, or a spin about the intermediate axis, by its closed form."""
     index = order[0] if equal_23 and not equal_12 else order[2]
     i_perp = 0.5 * (s[1] + s[2]) if equal_23 else 0.5 * (s[0] + s[1])
     if saddle and not equal_12 and not equal_23:
@@ -138,7 +140,7 @@ def _symmetric(mom, order, s, equal_12, equal_23, saddle, m, time):
 
 @njit(cache=True)
 def _unit_axis(index):
-    """Unit vector e_index, 3-tuple."""
+    """Return the unit vector e_index as a 3-tuple."""
     return (1.0 if index == 0 else 0.0, 1.0 if index == 1 else 0.0, 1.0 if index == 2 else 0.0)
 
 
@@ -167,7 +169,7 @@ def _axisymmetric(axis, i_axis, i_perp, m, time):
 
 @njit(cache=True)
 def _working_frame(order, s, m):
-    """The working frame (9-tuple, body to working) of ``m`` and its moments (3-tuple).
+    """Return the working frame (9-tuple, body to working) of ``m`` and its moments (3-tuple).
 
     Axis 3 is the one m circles (major, or minor below the separatrix); the frame is a
     proper signed permutation with ``m1 >= 0``.

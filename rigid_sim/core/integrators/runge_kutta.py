@@ -5,9 +5,11 @@
 A method is data: its tableau and the momenta it differentiates. Baraff's world-axes ``L``
 has ``omega = R I_body^-1 R^T L`` depend on ``q``, so every error in ``q`` feeds back into
 ``omega`` and grows. Body-axes ``L_b = R^T L`` has ``omega_b = I_body^-1 L_b`` independent
-of ``q`` (Euler's equations): near the intermediate axis RK4 is 1000-2500x more accurate at
-the same step in body axes (docs/accuracy.md). The public state stays Baraff's; only the
-inside of a step changes: in body axes, slots 10:13 of the internal state hold ``L_b``.
+of ``q`` (Euler's equations), so near the intermediate axis RK4 in body axes is orders of
+magnitude more accurate at the same step (``rk4`` against ``rk4_world`` in the tumbling
+table of docs/accuracy.md, made by ``rigid_sim_bench accuracy``). The public state stays
+Baraff's; only the inside of a step changes: in body axes, slots 10:13 of the internal state
+hold ``L_b``.
 """
 from dataclasses import dataclass
 
@@ -30,7 +32,7 @@ class Tableau:
     c: tuple   # stage times as fractions of dt
 
     def arrays(self):
-        """``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays for the compiled kernel."""
+        """Return ``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays for the compiled kernel."""
         stages = len(self.b)
         a = np.zeros((stages, stages))
         for stage, row in enumerate(self.a):
@@ -38,7 +40,7 @@ class Tableau:
         return a, np.array(self.b, dtype=float), np.array(self.c, dtype=float)
 
     def chained(self):
-        """``a`` as its subdiagonal (S,), ``b`` (S,) and ``c`` (S,).
+        """Return ``a`` as its subdiagonal (S,), with ``b`` (S,) and ``c`` (S,).
 
         For tableaux whose stages each use only the slope before (forward Euler, classical
         RK4), which then need no stored slopes; ValueError for any other.
@@ -125,7 +127,7 @@ def _add_slope(y, i, weight, slope):
 
 @njit(cache=True)
 def _to_public(y, body_axes):
-    """Unit quaternions and, from ``L_b`` in slots 10:13, world-axes ``L``, in place."""
+    """Normalise the quaternions and turn ``L_b`` (slots 10:13) into world-axes ``L``, in place."""
     for i in range(y.shape[0]):
         q = kin.normalize(kin.orientation(y, i))
         kin.store(y, i, 3, q)
@@ -158,16 +160,27 @@ def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
 
 @njit(cache=True)
 def body_momentum_derivative(inner, work, model, effects, time, out):
-    """Time derivative of the body-axes internal state, for an external stepper.
+    """Compute the time derivative of the body-axes internal state, for an external stepper.
 
     Parameters
     ----------
-    inner : (N, 13) float, [x, q, P, L_b]: ``L_b`` in body axes
-    work : tuple, scratch (world (N, 13), momentum (N, 3), force (N, 3), torque (N, 3))
+    inner : (N, 13) float
+        Internal state [x, q, P, L_b]: x and P in the world frame, ``L_b`` in body axes.
+    work : tuple of arrays
+        Scratch: world state (N, 13), momentum (N, 3), force (N, 3), torque (N, 3).
     model : Model
-    effects : tuple of the effects' parameters (see ``effects.base.accumulate``)
-    time : float, s
-    out : (N, 13) float, where ``d inner / dt`` is written and returned
+        The bodies' static arrays.
+    effects : tuple of NamedTuple
+        The effects' parameters (see ``effects.base.accumulate``).
+    time : float
+        Simulated time, s.
+    out : (N, 13) float
+        Where ``d inner / dt`` is written.
+
+    Returns
+    -------
+    (N, 13) float
+        ``out``.
     """
     world, momentum, force, torque = work
     zero = (0.0, 0.0, 0.0)
@@ -260,8 +273,9 @@ class ExplicitEuler(ExplicitRungeKutta):
 class RK4World(ExplicitRungeKutta):
     """Classical RK4 on Baraff's world-axes ``L``. Order 4.
 
-    Orientation error feeds back into omega: 1000-2500x less accurate than ``rk4`` near the
-    intermediate axis at the same step. Kept to show that cost.
+    Orientation error feeds back into omega, so near the intermediate axis it is far less
+    accurate than ``rk4`` at the same step (docs/accuracy.md, tumbling table). Kept as the
+    textbook formulation, to show that cost.
     """
 
     name = 'rk4_world'

@@ -1,3 +1,5 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
 """Splitting methods: kick the momenta with the wrench, drift with the free motion.
 
 One Strang step of ``h`` is
