@@ -47,10 +47,10 @@ def warm_up(world, integrator, logger):
     """Compile or load ``world``'s kernels, logging one line as compiling starts; the count.
 
     Nothing is logged when every kernel is in memory or numba's disk cache; otherwise one
-    line before the first compilation and the seconds it took after. At start this delays
-    the first tick; after a scene or integrator change it runs in the parameter callback
-    and blocks the executor (the tick too) for as long, the time the first step would
-    otherwise take.
+    line before the first compilation and the seconds it took after. At start this runs
+    after the node has said what it simulates and before it spins; after a scene or
+    integrator change it runs in the parameter callback and blocks the executor (the tick
+    too) for as long, the time the first step would otherwise take.
 
     Parameters
     ----------
@@ -101,7 +101,6 @@ class RigidSimNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         self.settings = parameters.declare(self)
         self.scene, self.world = load(self.settings)
-        self._warm_up()
         self.ticks = 0
         self._pending = None       # validated parameter change awaiting the post-set callback
         self.qos_overrides = QosOverrides(self)
@@ -124,6 +123,10 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
+        self._warm_up()
+        # Pace and measure from now: no tick is owed for the wall time the warm-up took.
+        self.loop.set_rate(self.settings.rate)
+        self.health.restart(self.world.time)
 
     @property
     def paused(self):

@@ -62,15 +62,21 @@ def cache_root(environ=os.environ):
 
 
 def prune(root, keep, now=None):
-    """Delete keyed directories under ``root`` but ``keep`` unused for ``STALE_AFTER``.
+    """Delete the keyed directories under ``root``, ``keep`` excepted, unused for long.
 
-    Only names shaped like a key are touched, and a directory any process used recently
-    stays (several checkouts of different versions may share ``root``).
+    Long is ``STALE_AFTER``. Only names shaped like a key are touched, and a directory any
+    process used recently stays (several checkouts of different versions may share
+    ``root``).
     """
     now = time.time() if now is None else now
     for entry in root.iterdir():
-        if entry.name != keep and KEY.fullmatch(entry.name) and entry.is_dir() \
-                and now - entry.stat().st_mtime > STALE_AFTER:
+        if entry.name == keep or not KEY.fullmatch(entry.name):
+            continue
+        try:
+            stale = entry.is_dir() and now - entry.stat().st_mtime > STALE_AFTER
+        except OSError:   # another process pruned it first
+            continue
+        if stale:
             shutil.rmtree(entry, ignore_errors=True)
 
 
@@ -87,9 +93,10 @@ def use_keyed_cache(environ=os.environ):
     try:
         directory.mkdir(parents=True, exist_ok=True)
         os.utime(directory)   # marks it used, for prune
-        prune(root, key)
     except OSError:
         directory = Path(tempfile.mkdtemp(prefix='rigid_sim_numba_'))
         atexit.register(shutil.rmtree, directory, ignore_errors=True)
+    else:
+        prune(root, key)
     config.CACHE_DIR = str(directory)
     return directory
