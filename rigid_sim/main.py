@@ -45,8 +45,23 @@ class _Stopper:
             raise Stop(signum)
 
 
+def _drop_swallowed_stops(previous):
+    """Wrap ``sys.unraisablehook`` so that a :class:`Stop` Python had to drop stays quiet.
+
+    A signal landing inside a C callback (numba's LLVM object cache, while the node's
+    warm-up loads or compiles kernels) raises Stop where Python can only report and drop
+    it; the stop is already recorded in ``requested``, and the node never spins.
+    """
+    def hook(unraisable):
+        """Pass on everything but a dropped Stop."""
+        if not isinstance(unraisable.exc_value, Stop):
+            previous(unraisable)
+    return hook
+
+
 def main(args=None):
     """Run the node until SIGINT or SIGTERM; return 0, or 1 when the start is refused."""
+    sys.unraisablehook = _drop_swallowed_stops(sys.unraisablehook)
     stopper = _Stopper()
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)

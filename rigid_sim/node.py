@@ -19,6 +19,7 @@ from rigid_sim import conversions, parameters
 from rigid_sim.control import SimControl
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
+from rigid_sim.core.warm_up import warm_up_reporting
 from rigid_sim.diagnostics_output import DiagnosticsOutput
 from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
@@ -40,6 +41,37 @@ def load(settings):
     scene = load_scene(find_scene(settings.scene))
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
+
+
+def warm_up(world, integrator, logger):
+    """Compile or load ``world``'s kernels, logging one line as compiling starts; the count.
+
+    Nothing is logged when every kernel is in memory or numba's disk cache; otherwise one
+    line before the first compilation and the seconds it took after. At start this runs
+    after the node has said what it simulates and before it spins; after a scene or
+    integrator change it runs in the parameter callback and blocks the executor (the tick
+    too) for as long, the time the first step would otherwise take.
+
+    Parameters
+    ----------
+    world : rigid_sim.core.world.World
+        The world about to be stepped; left as it was.
+    integrator : str
+        Its integrator's name, for the log line.
+    logger : rclpy.impl.rcutils_logger.RcutilsLogger
+        Where the lines go (info level).
+
+    Returns
+    -------
+    int
+        Kernel specialisations compiled (0: all were loaded or already compiled).
+    """
+    seconds, compiled = warm_up_reporting(world, lambda: logger.info(
+        f'compiling the {integrator} kernels for this scene (first start; cached '
+        'afterwards) ...'))
+    if compiled:
+        logger.info(f'compiled {compiled} kernels in {seconds:.1f} s')
+    return compiled
 
 
 def check_frames(scene, settings):
@@ -91,6 +123,10 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
+        self._warm_up()
+        # Pace and measure from now: no tick is owed for the wall time the warm-up took.
+        self.loop.set_rate(self.settings.rate)
+        self.health.restart(self.world.time)
 
     @property
     def paused(self):
@@ -219,6 +255,7 @@ class RigidSimNode(Node):
         previous, self.settings = self.settings, proposed
         if isinstance(prepared, tuple):
             self.scene, self.world = prepared
+            self._warm_up()
             self._wire_scene()
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
@@ -226,6 +263,7 @@ class RigidSimNode(Node):
         else:
             if prepared is not None:
                 self.world.integrator = prepared
+                self._warm_up()
             frames = (proposed.world_frame, proposed.frame_prefix)
             if frames != (previous.world_frame, previous.frame_prefix):
                 self.outputs.set_frame(self.scene, *frames)
@@ -235,6 +273,10 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe())
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
+
+    def _warm_up(self):
+        """Warm up the current world; see :func:`warm_up` (this blocks the executor)."""
+        self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger())
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""
