@@ -6,9 +6,9 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.diagnostics_window import TickStats, health, refusal_values, window_values
+from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 PERIOD = 1.0  # s of wall time; /diagnostics aggregators expect about 1 Hz
-QUEUE_DEPTH = 10
 
 
 class DiagnosticsOutput:

@@ -10,8 +10,7 @@ from sensor_msgs.msg import Imu
 
 from rigid_sim import conversions
 from rigid_sim.core.imu import build_imus
-
-QUEUE_DEPTH = 10
+from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 
 class ImuOutputs:

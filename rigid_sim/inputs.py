@@ -26,8 +26,8 @@ from rclpy.clock import Clock, ClockType
 from rigid_sim import conversions
 from rigid_sim.core.body_state import with_pose, with_twist
 from rigid_sim.core.scene import wrench_target
+from rigid_sim.qos_overrides import QUEUE_DEPTH
 
-QUEUE_DEPTH = 10
 WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
 DEMAND_REFRESH = 0.5  # s of wall time between two looks for new set_pose/set_twist publishers
 STATE_TOPICS = (('set_pose', PoseStamped), ('set_twist', TwistStamped))

@@ -23,8 +23,8 @@ from rigid_sim.core.warm_up import warm_up_reporting
 from rigid_sim.diagnostics_output import DiagnosticsOutput
 from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
-from rigid_sim.outputs import LISTENER_REFRESH, QUEUE_DEPTH, StateOutputs
-from rigid_sim.qos_overrides import QosOverrides
+from rigid_sim.outputs import LISTENER_REFRESH, StateOutputs
+from rigid_sim.qos_overrides import QUEUE_DEPTH, QosOverrides
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
 

@@ -18,12 +18,12 @@ from rclpy.event_handler import PublisherEventCallbacks
 from visualization_msgs.msg import MarkerArray
 
 from rigid_sim import conversions
+from rigid_sim.qos_overrides import QUEUE_DEPTH
 from rigid_sim.tf_output import TfOutput
 
 # A new subscriber waits at most this long (s of wall time) on top of discovery, which
 # takes longer than this between processes anyway.
 LISTENER_REFRESH = 0.5
-QUEUE_DEPTH = 10
 # Per-body publishers go without rclpy's default QoS event handlers (which only log an
 # incompatible-QoS warning): each is a waitable that the executor collects again on every
 # spin, which with thousands of bodies costs more than the physics (docs/performance.md).

@@ -20,6 +20,8 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from rigid_sim.parameters import ParameterError
 
+# History depth of every topic the node publishes or subscribes to, unless overridden here.
+QUEUE_DEPTH = 10
 POLICIES = {kind.name.lower(): kind for kind in (
     QoSPolicyKind.HISTORY, QoSPolicyKind.DEPTH, QoSPolicyKind.RELIABILITY,
     QoSPolicyKind.DURABILITY)}
