@@ -29,8 +29,8 @@ TEXT_SUFFIXES = {'.py', '.md', '.yaml', '.yml', '.xml', '.cfg', '.ini', '.txt', 
 SKIPPED_DIRS = {'build', 'install', 'log', '__pycache__'}
 URL = re.compile(r'\w+://\S+')
 MARKDOWN_PATH = re.compile(r'[\w./-]*[\w-]\.md\b')
-# Names of notes kept outside the repository, and the path to them.
-OUTSIDE_NOTES = re.compile(r'\b(?:ROS_NOTES|INTERFACE|DESIGN|STYLE)\b|\.\./shared')
+# A bare name of notes (``<TOPIC>_NOTES``): notes the repository holds are docs/*.md pages.
+NOTES_NAME = re.compile(r'\b[A-Z]+_NOTES\b')
 # This file spells out what it forbids, as patterns and as examples.
 THIS_FILE = Path(__file__).resolve()
 
@@ -74,7 +74,7 @@ def missing_documents(text, folder, root=ROOT):
         Each offending name, in order of appearance.
     """
     text = URL.sub('', text)
-    missing = [match.group() for match in OUTSIDE_NOTES.finditer(text)]
+    missing = [match.group() for match in NOTES_NAME.finditer(text)]
     for name in (match.group() for match in MARKDOWN_PATH.finditer(text)):
         if '/' in name:
             candidates = [(folder / name).resolve(), (root / name).resolve()]
@@ -126,7 +126,7 @@ def test_the_document_check_catches_what_it_is_for(tmp_path):
     """A missing .md, a path out of the repository and an outside note are all caught."""
     (tmp_path / 'docs').mkdir()
     (tmp_path / 'docs' / 'held.md').write_text('')
-    text = ('see docs/held.md, held.md and ../shared/notes.md; docs/gone.md, gone.md; '
-            'https://example.com/remote.md; ROS_NOTES')
+    text = ('see docs/held.md, held.md, ../docs/held.md and ../../elsewhere/notes.md; '
+            'docs/gone.md, gone.md; https://example.com/remote.md; LAB_NOTES')
     assert missing_documents(text, tmp_path / 'docs', root=tmp_path) == [
-        '../shared', 'ROS_NOTES', '../shared/notes.md', 'docs/gone.md', 'gone.md']
+        'LAB_NOTES', '../../elsewhere/notes.md', 'docs/gone.md', 'gone.md']
