@@ -48,9 +48,10 @@ def warm_up(world, integrator, logger):
 
     Nothing is logged when every kernel is in memory or numba's disk cache; otherwise one
     line before the first compilation and the seconds it took after. At start this runs
-    after the node has said what it simulates and before it spins; after a scene or
-    integrator change it runs in the parameter callback and blocks the executor (the tick
-    too) for as long, the time the first step would otherwise take.
+    after the node has said what it simulates and before it creates its topics and
+    services, so a client that finds one is answered without a compile's delay. After a
+    scene or integrator change it runs in the parameter callback and blocks the executor
+    (the tick too) for as long, the time the first step would otherwise take.
 
     Parameters
     ----------
@@ -101,6 +102,10 @@ class RigidSimNode(Node):
         super().__init__(NODE_NAME, **kwargs)
         self.settings = parameters.declare(self)
         self.scene, self.world = load(self.settings)
+        self.get_logger().info(self._describe(self.settings.start_paused))
+        self._warn_on_frame_mismatch()
+        # Before any topic or service exists: once a client discovers one, the node answers.
+        self._warm_up()
         self.ticks = 0
         self._pending = None       # validated parameter change awaiting the post-set callback
         self.qos_overrides = QosOverrides(self)
@@ -120,10 +125,7 @@ class RigidSimNode(Node):
         self.qos_overrides.finish_start()
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
-        self.get_logger().info(self._describe())
-        self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
-        self._warm_up()
         # Pace and measure from now: no tick is owed for the wall time the warm-up took.
         self.loop.set_rate(self.settings.rate)
         self.health.restart(self.world.time)
@@ -159,12 +161,12 @@ class RigidSimNode(Node):
                 f'{self.settings.world_frame!r}; set world_frame:={self.scene.world_frame} '
                 f'to follow the scene')
 
-    def _describe(self):
+    def _describe(self, paused):
         s = self.settings
         pace = (f'at {s.rate:g} Hz' if s.rate > 0.0 else 'as fast as possible (rate 0)')
         aim = (f'real-time factor {s.real_time_factor:g}' if s.rate > 0.0
                else 'no real-time factor')
-        paused = ', paused' if self.paused else ''
+        paused = ', paused' if paused else ''
         return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
                 f'{s.integrator} {pace}, time_step {s.time_step:g} s x {s.substeps} '
                 f'substeps ({aim}); publishing every {s.publish_every} ticks; topics under '
@@ -270,7 +272,7 @@ class RigidSimNode(Node):
                 self.imu_outputs.set_frame_prefix(proposed.frame_prefix)
         if proposed.rate != previous.rate:
             self.loop.set_rate(proposed.rate)
-        self.get_logger().info(self._describe())
+        self.get_logger().info(self._describe(self.paused))
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
 

@@ -25,7 +25,7 @@ from ros_harness import TIMEOUT, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 NAMESPACE = f'/t{os.getpid()}'
-START_TIMEOUT = 30.0  # s: importing numpy, scipy and rclpy in a new process, then discovery
+START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
 
 
 def start_node(*ros_arguments, cwd):
