@@ -15,10 +15,11 @@ import signal
 import sys
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_sim.core.scene import SceneError
+from rigid_sim.executor import make_executor
 from rigid_sim.node import NODE_NAME, RigidSimNode
 from rigid_sim.parameters import ParameterError
 
@@ -82,8 +83,7 @@ def _run(stopper):
     except (ParameterError, SceneError, FileNotFoundError) as error:
         rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
         return 1
-    # Not the EventsExecutor: its spin() hangs on these wheels (docs/ros_notes.md).
-    executor = SingleThreadedExecutor()
+    executor = make_executor()
     executor.add_node(node)
     stopper.spinning = True
     try:

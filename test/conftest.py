@@ -54,10 +54,9 @@ def harness(ros_context):
     The node's tick loop is stopped: the test advances it with ``tick()``, unless it asks
     for ``harness(scene, ticking=True, **params)``.
     """
-    from rclpy.executors import SingleThreadedExecutor
-
+    from rigid_sim.executor import make_executor
     from ros_harness import SimHarness
-    executor = SingleThreadedExecutor(context=ros_context)
+    executor = make_executor(ros_context)
     made = []
 
     def start(scene, ticking=False, **params):

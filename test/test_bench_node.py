@@ -38,7 +38,7 @@ def test_scene_has_n_spinning_boxes_and_no_wrench_inputs_at_scale(tmp_path):
         np.testing.assert_array_equal(scene.effects['gravity']['acceleration'], [0, 0, -9.81])
 
 
-def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
+def test_quick_node_benchmark_measures_every_configuration(tmp_path, capfd):
     """Each quick configuration gets a row.
 
     The node advanced simulated time (a positive, finite real-time factor, near the target 1 since
@@ -50,7 +50,7 @@ def test_quick_node_benchmark_measures_every_configuration(tmp_path, capsys):
     out.write_text('# Hand-written title\n')
     args = cli.build_parser().parse_args(['node', '--quick', '--out', str(out)])
     results = args.run(args)
-    rows = table_rows(capsys.readouterr().out)
+    rows = table_rows(capfd.readouterr().out)  # capfd: the executor needs a real stderr
     assert [int(row[0]) for row in rows] == [config.bodies for config in QUICK['configs']]
     assert len(results) == len(QUICK['configs'])
     for result in results:

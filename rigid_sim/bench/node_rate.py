@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench node``: the node at scale, real-time factor and tick time against N.
 
-The node (:class:`rigid_sim.node.RigidSimNode`, every tick timed) spins in a
-SingleThreadedExecutor as ``rigid_sim_node`` runs it, on a scene of N boxes under gravity,
+The node (:class:`rigid_sim.node.RigidSimNode`, every tick timed) spins in the
+executor ``rigid_sim_node`` runs (:mod:`rigid_sim.executor`), on a scene of N boxes under gravity,
 each with its own spin. A listener in another process (:mod:`.node_listener`) subscribes to
 exactly the topics a configuration claims to publish and counts what arrives: the node only
 fills and sends outputs that have subscribers, so without it publishing would cost nothing.
@@ -24,12 +24,12 @@ from pathlib import Path
 import numpy as np
 import rclpy
 import yaml
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
 import rigid_sim
 from rigid_sim import bench
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
+from rigid_sim.executor import make_executor
 from rigid_sim.node import RigidSimNode
 
 SECTION = 'rigid_sim_bench node'
@@ -179,10 +179,10 @@ def measure(config, integrator, context, scene, log_dir, seconds):
                   integrator=integrator)
     node = TimedNode(context=context, parameter_overrides=[
         Parameter(name, value=value) for name, value in values.items()])
-    executor = SingleThreadedExecutor(context=context)   # as rigid_sim_node runs it
+    executor = make_executor(context)   # as rigid_sim_node runs it
     executor.add_node(node)
     topics = claimed_topics(node, config)
-    waitables = len(list(node.waitables))   # each is added to the wait set every spin_once
+    waitables = len(list(node.waitables))   # what a Python executor's round would collect
     listener = Listener(topics, log_dir)
     try:
         wait_matched(executor, node, topics)
@@ -296,7 +296,7 @@ def report(results, seconds, starts=()):
         '- Scene: N boxes (1 kg, 0.2 x 0.1 x 0.05 m) in a grid under gravity, each with its '
         f'own spin; from N = {WRENCH_INPUT_LIMIT} on `wrench_input: false`, so the executor '
         'does not wait on N wrench subscriptions (~625 callbacks/s with 100 of them).',
-        '- The node runs in one SingleThreadedExecutor, in one thread, as `rigid_sim_node` '
+        '- The node runs in one EventsExecutor, in one thread, as `rigid_sim_node` '
         'does; `/clock` goes out every tick (default). A listener process (the second core) '
         'subscribes to exactly the topics in "listened" and counts what arrives; the node '
         'fills and sends only outputs with subscribers.',

@@ -26,7 +26,12 @@ def rigid_sim_context(monkeypatch):
 
 @pytest.fixture
 def rigid_sim_executor(rigid_sim_context):
-    """Give a SingleThreadedExecutor on the test's context."""
+    """Give a SingleThreadedExecutor on the test's context.
+
+    Not the node's own executor (:mod:`rigid_sim.executor`): between two ticks the kit runs
+    every callback that is ready (:func:`rigid_sim.testing.run_ready_callbacks`), which only
+    the Python executors can say.
+    """
     from rclpy.executors import SingleThreadedExecutor
     executor = SingleThreadedExecutor(context=rigid_sim_context)
     yield executor
