@@ -305,7 +305,8 @@ def report(results, seconds, starts=()):
         'time advanced over wall time; the tick loop catches late ticks up and gives up '
         'those more than 0.1 s behind (`rigid_sim/tick_loop.py`).',
         '- Waitables: entities of the node (such as the QoS event handlers rclpy gives every '
-        'publisher) that the executor adds to its wait set on every `spin_once`, in Python.',
+        'publisher) that a Python executor adds to its wait set on every round; the '
+        'EventsExecutor does not rebuild a wait set.',
         '', '### Real-time factor and tick time', table(results),
         '', '### Start and stop of the executable',
         '`rigid_sim_node` on a scene of N boxes that all take wrenches, default parameters '
