@@ -46,24 +46,30 @@ class _Stopper:
             raise Stop(signum)
 
 
-def _drop_swallowed_stops(previous):
+def _drop_swallowed_stops(previous, stopper):
     """Wrap ``sys.unraisablehook`` so that a :class:`Stop` Python had to drop stays quiet.
 
     A signal landing inside a C callback (numba's LLVM object cache, while the node's
     warm-up loads or compiles kernels) raises Stop where Python can only report and drop
-    it; the stop is already recorded in ``requested``, and the node never spins.
+    it; the stop is already recorded in ``requested``, and the node never spins. The
+    compiler objects it interrupted may then fail again in their finalizers (llvmlite's
+    ``ObjectRef.__del__``): once a stop is requested, those are dropped too.
     """
     def hook(unraisable):
-        """Pass on everything but a dropped Stop."""
-        if not isinstance(unraisable.exc_value, Stop):
-            previous(unraisable)
+        """Pass on everything but a dropped Stop and what it left half-built in llvmlite."""
+        if isinstance(unraisable.exc_value, Stop):
+            return
+        where = getattr(unraisable.object, '__module__', None) or ''
+        if stopper.requested and where.startswith('llvmlite'):
+            return
+        previous(unraisable)
     return hook
 
 
 def main(args=None):
     """Run the node until SIGINT or SIGTERM; return 0, or 1 when the start is refused."""
-    sys.unraisablehook = _drop_swallowed_stops(sys.unraisablehook)
     stopper = _Stopper()
+    sys.unraisablehook = _drop_swallowed_stops(sys.unraisablehook, stopper)
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)
     try:
