@@ -6,28 +6,9 @@ With numpy the same dozen (K, 3) products cost more in call overhead than the st
 for a few IMUs (docs/performance.md); compiled, they cost about as much as one body-step.
 Formulas: :mod:`rigid_sim.core.imu`.
 """
-import math
-
-import numpy as np
 from numba import njit
 
-
-@njit(cache=True)
-def _matrix(q):
-    """Body-to-world rotation matrix of the quaternion (x, y, z, w), normalised first."""
-    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    x, y, z, w = q[0] / n, q[1] / n, q[2] / n, q[3] / n
-    r = np.empty((3, 3))
-    r[0, 0], r[0, 1], r[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
-    r[1, 0], r[1, 1], r[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
-    r[2, 0], r[2, 1], r[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
-    return r
-
-
-@njit(cache=True)
-def _cross(a, b):
-    return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]))
+from rigid_sim.core import kinematics as kin
 
 
 @njit(cache=True)
@@ -61,11 +42,19 @@ def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, grav
         Output: specific force at the mount point, body axes, m/s^2.
     """
     for k in range(q.shape[0]):
-        turn = _matrix(q[k])
-        back = turn.T.copy()
-        om = inertia_inv[k] @ (back @ momentum[k])
-        alpha = inertia_inv[k] @ (back @ torque[k] - _cross(om, inertia[k] @ om))
-        r = lever[k]
-        omega[k] = om
-        specific_force[k] = (back @ (force[k] / mass[k] - gravity) + _cross(alpha, r)
-                             + _cross(om, _cross(om, r)))
+        turn = kin.matrix(kin.normalize(kin.orientation_row(q, k)))
+        om = kin.apply(inertia_inv[k], kin.rotate_inverse(turn, kin.vector(momentum, k, 0)))
+        turned = kin.rotate_inverse(turn, kin.vector(torque, k, 0))
+        gyroscopic = kin.cross(om, kin.apply(inertia[k], om))
+        alpha = kin.apply(inertia_inv[k], (turned[0] - gyroscopic[0], turned[1] - gyroscopic[1],
+                                           turned[2] - gyroscopic[2]))
+        r = kin.vector(lever, k, 0)
+        f, m = kin.vector(force, k, 0), mass[k]
+        per_mass = (f[0] / m - gravity[0], f[1] / m - gravity[1], f[2] / m - gravity[2])
+        weightless = kin.rotate_inverse(turn, per_mass)   # a_com - g, body axes
+        tangential = kin.cross(alpha, r)
+        centripetal = kin.cross(om, kin.cross(om, r))
+        kin.store(omega, k, 0, om)
+        kin.store(specific_force, k, 0, (weightless[0] + tangential[0] + centripetal[0],
+                                         weightless[1] + tangential[1] + centripetal[1],
+                                         weightless[2] + tangential[2] + centripetal[2]))
