@@ -78,9 +78,12 @@ class StateMessages:
 
     Parameters
     ----------
-    bodies : sequence of N scene BodySpec
-    world_frame : str, frame_id of every pose
-    frame_prefix : str, prefixed to the body frames (odometry child, transforms)
+    bodies : sequence of BodySpec
+        The scene's N bodies, in scene order.
+    world_frame : str
+        The frame_id of every pose and world-axes twist.
+    frame_prefix : str
+        Prefixed to the body frames (odometry child, transforms).
 
     Attributes
     ----------
@@ -152,21 +155,23 @@ def copy_pose_to_transform(pose, transform):
 
 
 def static_transforms(bodies, frame_prefix, seconds):
-    """Build the transforms from each body frame to its named points and its IMU frame.
+    """Build the static transforms from each body frame to its named points and IMU frame.
 
     Parameters
     ----------
-    bodies : sequence of scene BodySpec
-        ``points``: name -> (3,) m, body frame; ``imu``: an ImuSpec or None.
+    bodies : sequence of BodySpec
+        The scene's bodies; ``points`` maps a name to its (3,) position, m, body frame,
+        and ``imu`` is an ImuSpec or None.
     frame_prefix : str
-        Prefixed to every frame.
+        Prefixed to every frame name.
     seconds : float
         Simulated time of the stamp, s.
 
     Returns
     -------
-    list of TransformStamped, parent ``<prefix><body>``, child ``<prefix><body>/<point>``
-    (``<prefix><body>/imu`` for an IMU placed by coordinates), identity rotation.
+    list of TransformStamped
+        Parent ``<prefix><body>``, child ``<prefix><body>/<point>`` (``<prefix><body>/imu``
+        for an IMU placed by coordinates), identity rotation.
     """
     transforms = []
     for body in bodies:
@@ -184,7 +189,7 @@ def static_transforms(bodies, frame_prefix, seconds):
 
 
 def delete_all_markers():
-    """Return a MarkerArray that clears every marker of this publisher in RViz."""
+    """Build a MarkerArray that clears every marker of this publisher in RViz."""
     return MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
 
 
@@ -228,7 +233,7 @@ def marker(index, body, pose):
 
 
 def imu_message(frame_id, spec):
-    """Return a sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
+    """Build a sensor_msgs/Imu in ``frame_id`` with the covariances of ``spec`` (an ImuSpec).
 
     The angular velocity and linear acceleration covariances are diagonal: the variance of
     one reading's white noise (the bias is not white; it is what an estimator tracks). The

@@ -71,12 +71,12 @@ def refusal_values(refused, last_refusal, superseded):
 
 
 def health(stats, tick_period, dropped=0):
-    """Diagnostic level and summary of the window that ``stats`` covers.
+    """Grade the window that ``stats`` covers: a diagnostic level and a summary.
 
     Parameters
     ----------
     stats : TickStats
-        The window.
+        Step times, failed ticks and advanced simulated time over the window.
     tick_period : float or None
         s of wall time per tick; None when the node ticks as fast as it can.
     dropped : int

@@ -77,7 +77,7 @@ class Settings:
 
     @property
     def real_time_factor(self):
-        """Return the real-time factor the loop aims at; None at rate 0 (no aim)."""
+        """Return the simulated seconds per wall second the loop aims at; None at rate 0."""
         return self.rate * self.time_step if self.rate > 0.0 else None
 
 

@@ -79,7 +79,7 @@ class QosOverrides:
         return publisher
 
     def finish_start(self):
-        """Refuse overrides of topics the node does not publish; none are declared from now."""
+        """Refuse overrides of topics the node does not publish (ParameterError); none from now."""
         self.starting = False
         unused = sorted(name for topic, names in self._requested.items()
                         if topic not in self._profiles for name in names)

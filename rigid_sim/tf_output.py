@@ -26,7 +26,8 @@ class TfOutput:
 
     Parameters
     ----------
-    node : rigid_sim.node.RigidSimNode, creates the publishers through its ``qos_overrides``
+    node : rigid_sim.node.RigidSimNode
+        Creates the publishers through its ``qos_overrides``.
     """
 
     def __init__(self, node):
@@ -40,7 +41,7 @@ class TfOutput:
         self._static = node.qos_overrides.create_publisher(TFMessage, '/tf_static', STATIC_QOS)
 
     def message(self, transforms):
-        """Wrap ``transforms`` (TransformStamped) in a TFMessage; None without tf."""
+        """Wrap ``transforms`` (list of TransformStamped) in a TFMessage, or None without tf."""
         return TFMessage(transforms=transforms) if self.available else None
 
     def publish_static(self, transforms):

@@ -55,10 +55,9 @@ def frame_state(world, index):
 
 
 def test_set_pose_places_the_frame_keeps_its_twist_and_no_other_row(world):
-    """Set pose places the frame keeps its twist and no other row.
+    """After with_pose the world reads back the pose set and the twist it had before.
 
-    After with_pose the world's kinematics read back the pose set and the twist before; the other
-    body's row and the given array are bitwise unchanged.
+    The other body's row and the given array are bitwise unchanged.
     """
     before = world.y.copy()
     _, _, velocity, angular_velocity = frame_state(world, 0)
@@ -73,10 +72,9 @@ def test_set_pose_places_the_frame_keeps_its_twist_and_no_other_row(world):
 
 
 def test_set_twist_moves_the_frame_origin_as_given_and_keeps_the_pose(world):
-    """Set twist moves the frame origin as given and keeps the pose.
+    """The velocity with_twist sets is the frame origin's, not the centre of mass's.
 
-    with_twist sets the velocity of the frame origin (not of the centre of mass): the centre of
-    mass then moves at v + omega x R c, and the momentum is M times that.
+    The centre of mass then moves at v + omega x R c, and the momentum is M times that.
     """
     origin, orientation, _, _ = frame_state(world, 0)
     world.y = with_twist(world.bodies, world.y, 0, *TWIST)
@@ -112,10 +110,7 @@ def test_nearly_unit_quaternion_is_normalised(world):
 
 @pytest.fixture
 def paused(harness, write_scene):
-    """Give the scene over ROS, paused after two ticks.
-
-    Paused ticks apply inputs and publish.
-    """
+    """Run the scene over ROS, paused after two ticks (paused ticks apply inputs and publish)."""
     sim = harness(write_scene(MESH_FREE), time_step=STEP, integrator='rk4')
     sim.tick(2)
     assert sim.call(SetBool, 'pause', SetBool.Request(data=True)).success
@@ -123,10 +118,9 @@ def paused(harness, write_scene):
 
 
 def test_set_pose_and_twist_over_ros_take_effect_at_the_next_tick(paused):
-    """Set pose and twist over ros take effect at the next tick.
+    """A pose and twist set over ROS are published after the next tick, time untouched.
 
-    Published after the next tick: the pose and twist set, time and the ball untouched; resumed,
-    the ball (a sphere) flies on from them: p + v t, exp([omega] t) R.
+    Resumed, the ball (a sphere) flies on from them: p + v t, exp([omega] t) R.
     """
     ball_before = paused.state('ball')
     paused.set_pose('offset', *POSE)

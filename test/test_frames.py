@@ -54,10 +54,10 @@ def test_body_transforms_carry_the_published_poses_under_prefixed_frames():
 
 
 def test_static_transforms_place_every_point_and_imu_frame_on_its_body():
-    """Static transforms place every point and imu frame on its body.
+    """Static transforms place <body>/<point> at the point's body-frame coordinates.
 
-    <body> -> <body>/<point> at the point's body-frame coordinates, no rotation; an IMU given by
-    coordinates adds <body>/imu, one at a named point adds nothing new.
+    They carry no rotation; an IMU given by coordinates adds <body>/imu, one at a named
+    point adds nothing new.
     """
     scene = parse_scene(yaml.safe_load(SCENE))
     statics = conversions.static_transforms(scene.bodies, 'sim1/', 0.0)
@@ -85,10 +85,10 @@ def test_node_runs_without_tf2_msgs_and_says_so_once(ros_context, write_scene, c
 
 
 def test_frame_prefix_names_frames_in_messages_and_wrenches_may_use_it(harness, write_scene):
-    """Frame prefix names frames in messages and wrenches may use it.
+    """Odometry child and IMU frames carry the prefix, and wrench frames may use it.
 
-    Odometry child and IMU frames carry the prefix; a wrench at 'sim1/box/thruster' acts at the
-    thruster: a body-axes force f at p = (-0.2, 0, 0) gives torque p x f about z.
+    A wrench at 'sim1/box/thruster' acts at the thruster: a body-axes force f at
+    p = (-0.2, 0, 0) gives torque p x f about z.
     """
     sim = harness(write_scene(SCENE), frame_prefix='sim1/', time_step=1 / 64,
                   wrench_timeout=0.0)

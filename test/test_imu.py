@@ -69,10 +69,10 @@ def test_body_held_up_by_its_weight_reads_g_along_world_up_in_its_own_axes():
 
 
 def test_spin_about_a_principal_axis_reads_centripetal_towards_the_axis():
-    """Spin about a principal axis reads centripetal towards the axis.
+    """A steady spin about a principal axis reads a centripetal force towards it.
 
-    omega = 5 rad/s about body z, IMU at r = (0.15, -0.05, 0.02): f = -omega^2 (x, y, 0), the gyro
-    reads (0, 0, 5) in body axes, at any time of the steady spin.
+    At omega = 5 rad/s about body z and an IMU at r = (0.15, -0.05, 0.02):
+    f = -omega^2 (x, y, 0), and the gyro reads (0, 0, 5) in body axes, at any time.
     """
     omega = 5.0
     spin = TILT.apply([0.0, 0.0, omega]).tolist()
@@ -93,10 +93,10 @@ def test_torque_on_a_body_at_rest_reads_the_tangential_alpha_cross_r():
 
 
 def test_named_point_and_readings_on_the_imu_grid_of_simulated_time():
-    """Named point and readings on the imu grid of simulated time.
+    """An IMU at a named point reads on the grid of its rate in simulated time.
 
-    An IMU at a named point, 25 Hz, ticked at 1/64 s: it reads at the first tick at or after each
-    multiple of 0.04 s (t = 0, 3/64, 6/64, 8/64, ...), not at every tick.
+    At 25 Hz, ticked at 1/64 s, it reads at the first tick at or after each multiple of
+    0.04 s (t = 0, 3/64, 6/64, 8/64, ...), not at every tick.
     """
     spec = scene('{point: tip, rate: 25.0}', extra='    points: {tip: [0.2, 0.0, 0.0]}')
     world = build_world(spec, 'rk4')
@@ -127,10 +127,10 @@ def noisy_readings(seed, count, dt):
 
 
 def test_white_noise_has_its_mean_and_standard_deviation_within_sampling_bounds():
-    """White noise has its mean and standard deviation within sampling bounds.
+    """Gyro white noise has the mean and standard deviation of its model.
 
-    4000 x 3 gyro samples of N(0.2, 0.01^2): the mean within 5 standard errors of 0.2, the sample
-    standard deviation within 5 of its standard errors (sigma / sqrt(2 n)).
+    Over 4000 x 3 samples of N(0.2, 0.01^2), the mean lies within 5 standard errors of 0.2
+    and the sample standard deviation within 5 of its standard errors (sigma / sqrt(2 n)).
     """
     gyro, _ = noisy_readings(seed=1, count=4000, dt=0.01)
     n = gyro.size
@@ -139,10 +139,9 @@ def test_white_noise_has_its_mean_and_standard_deviation_within_sampling_bounds(
 
 
 def test_bias_random_walk_grows_as_sigma_squared_t():
-    """Bias random walk grows as sigma squared t.
+    """The bias of a random walk of density 0.3 / sqrt(s) has variance 0.09 t.
 
-    A random walk of density 0.3 / sqrt(s): across 200 seeds x 3 axes the variance of the bias at t
-    is 0.09 t, within 5 standard errors (chi-square: var sqrt(2 / n)).
+    Across 200 seeds x 3 axes, within 5 standard errors (chi-square: var sqrt(2 / n)).
     """
     runs = np.array([noisy_readings(seed, count=41, dt=0.05)[1] for seed in range(200)])
     for k, t in ((10, 0.5), (40, 2.0)):
@@ -173,10 +172,10 @@ def test_bad_imu_entries_are_refused_naming_the_key(imu, key, reason):
 
 
 def test_imu_topic_over_ros(harness, write_scene):
-    """Imu topic over ros.
+    """The ~/box/imu topic carries frame, stamps, covariances and readings as specified.
 
-    ~/box/imu: frame box/imu, stamps of simulated time, covariances from the noise model, and a
-    body held up by m g reading +g along world up (every tick: no rate given).
+    Frame box/imu, stamps of simulated time, covariances from the noise model, and a body
+    held up by m g reading +g along world up (every tick: no rate given).
     """
     text = f"""
 effects: {{gravity: {{acceleration: {G.tolist()}}}}}
@@ -211,10 +210,10 @@ bodies:
 
 
 def test_packaged_imu_scene_reads_what_its_comment_and_the_readme_say():
-    """Packaged imu scene reads what its comment and the readme say.
+    """The IMU of config/scenes/imu.yaml reads what its comment and the README say.
 
-    config/scenes/imu.yaml: hanging still while spinning at 2 rad/s, the IMU 0.1 m out reads omega
-    (0, 0, 2) and f = (-omega^2 r, 0, g) in body axes, at any time.
+    Hanging still while spinning at 2 rad/s, the IMU 0.1 m out reads omega (0, 0, 2) and
+    f = (-omega^2 r, 0, g) in body axes, at any time.
     """
     from pathlib import Path
 

@@ -31,10 +31,10 @@ def stamps(sim, topic):
 
 def test_started_paused_the_node_advances_only_by_step_and_publishes_every_tick(
         harness, write_scene):
-    """Started paused the node advances only by step and publishes every tick.
+    """Started paused, the node holds t = 0 and advances only by ~/step.
 
-    start_paused holds t = 0; each ~/step advances step_ticks ticks, publishes each of them (stamps
-    STEP, 2 STEP, 3 STEP) and answers with the new time once they are done.
+    Each ~/step advances step_ticks ticks, publishes each of them (stamps STEP, 2 STEP,
+    3 STEP) and answers with the new time once they are done.
     """
     sim = harness(write_scene(SCENE), time_step=STEP, start_paused=True, step_ticks=3)
     sim.tick(2)   # ticks of the wall-clock loop while paused: time stands at 0
@@ -67,12 +67,12 @@ def test_step_is_refused_with_the_reason_while_running(harness, write_scene):
 
 def test_rate_zero_ticks_without_a_wall_clock_and_stands_still_while_paused(
         harness, write_scene):
-    """Rate zero ticks without a wall clock and stands still while paused.
+    """At rate 0 the node ticks as fast as it can; paused, it ticks only on ~/step.
 
-    rate 0: the node ticks on its own as fast as it can, /clock advancing by exactly time_step per
-    tick; paused, nothing ticks until ~/step asks for it.  A subscriber slower than the node may
-    miss some /clock messages (the publisher keeps the last 10), so the received times are checked
-    to be whole, increasing tick counts.
+    /clock advances by exactly time_step per tick. A subscriber slower than the node may
+    miss some /clock messages (the publisher keeps the last 10), so the received times are
+    checked to be whole, increasing tick counts. /diagnostics, with no wall rate to aim at,
+    states no real-time factor target and stays OK.
     """
     sim = harness(write_scene(SCENE), ticking=True, rate=0, time_step=STEP)
     clock = sim.received['/clock']

@@ -34,10 +34,10 @@ def depth(node, topic):
 
 
 def test_overrides_of_aggregate_and_per_body_topics_are_honoured(ros_context, write_scene):
-    """Overrides of aggregate and per body topics are honoured.
+    """Overrides of the QoS of aggregate and per-body topics hold, across a scene reload too.
 
-    Best effort ~/poses, transient-local /clock and a depth-2 ~/box/pose, kept across a scene
-    reload; the declared parameters say what was applied.
+    Best effort ~/poses, transient-local /clock and a depth-2 ~/box/pose; the declared
+    parameters say what was applied.
     """
     node = start(ros_context, write_scene, **{
         '/rigid_sim/poses.publisher.reliability': 'best_effort',

@@ -62,10 +62,10 @@ def make_loop(rate=RATE):
 
 
 def test_late_wake_ups_are_caught_up_so_ticks_follow_wall_time(clock):
-    """Late wake ups are caught up so ticks follow wall time.
+    """Ticks catch up after late wake-ups, so simulated time never drifts from wall time.
 
-    Wake-ups at jittered times up to 20 periods late: after each, the ticks run equal the ticks
-    due, floor(elapsed x rate) + 1, so simulated time never drifts.
+    Wake-ups come at jittered times up to 20 periods late; after each, the ticks run equal
+    the ticks due, floor(elapsed x rate) + 1.
     """
     start = clock.now + 1.0 / RATE   # the first tick is due one period after the start
     loop, wake, ticks = make_loop()
@@ -87,9 +87,9 @@ def test_an_early_or_repeated_wake_up_runs_no_tick_twice(clock):
 
 
 def test_falling_behind_by_more_than_the_bound_gives_ticks_up_and_counts_them(clock):
-    """Falling behind by more than the bound gives ticks up and counts them.
+    """Falling behind by more than MAX_LAG gives the owed ticks up and counts them.
 
-    A stall of 0.5 s at 1 kHz (beyond MAX_LAG): one tick runs, the other 500 owed are given up and
+    After a stall of 0.5 s at 1 kHz, one tick runs, the other 500 owed are given up and
     counted once; the schedule then restarts from that moment.
     """
     assert MAX_LAG < 0.5

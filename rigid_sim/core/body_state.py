@@ -75,10 +75,11 @@ def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
 
 
 def with_pose(bodies, y, index, origin, orientation):
-    """Return a new state with body ``index``'s frame at a new pose.
+    """Return a new state with body ``index``'s frame at ``origin`` and ``orientation``.
 
-    The frame origin goes to ``origin`` (3,) m, its axes to ``orientation`` (4,). The body
-    keeps its twist (velocity of its frame origin and angular velocity, world
+    ``origin`` is (3,), m, world frame; ``orientation`` is (4,), (x, y, z, w), body to world.
+
+    The body keeps its twist (velocity of its frame origin and angular velocity, world
     axes). ValueError, nothing changed, for a non-finite value or a quaternion further than
     ``UNIT_QUATERNION_TOLERANCE`` from unit length (within it, it is normalised).
     """
@@ -89,10 +90,10 @@ def with_pose(bodies, y, index, origin, orientation):
 
 
 def with_twist(bodies, y, index, velocity, angular_velocity):
-    """Return a new state with body ``index``'s frame moving as given, its pose kept.
+    """Return a new state with body ``index``'s twist set and its pose kept.
 
-    The frame origin moves at ``velocity`` (3,) m/s and the body turns at
-    ``angular_velocity`` (3,) rad/s, both world axes. ValueError, nothing changed, for a
+    The frame origin moves at ``velocity`` (3,), m/s, and the body turns at
+    ``angular_velocity`` (3,), rad/s, both in world axes. ValueError, nothing changed, for a
     non-finite value.
     """
     velocity = _finite('linear velocity', velocity, 3)

@@ -51,7 +51,9 @@ class ImuSpec:
 
 
 def parse_imu(value, key, points):
-    """Parse a body's ``imu`` entry into an :class:`ImuSpec`; ``points`` are the body's named ones.
+    """Parse a body's ``imu`` entry into an :class:`ImuSpec`.
+
+    ``points`` are the body's named points.
 
     Raises :class:`~rigid_sim.core.scene_fields.Mistake` naming the key and the reason.
     """
@@ -77,16 +79,21 @@ def parse_imu(value, key, points):
 
 
 def build_imus(scene_bodies, bodies, gravity):
-    """Build the :class:`Imus` of the scene's bodies that declare one, or None if none does.
+    """Build the :class:`Imus` of the scene's bodies that declare one.
 
     Parameters
     ----------
     scene_bodies : sequence of BodySpec
-        Their ``imu`` is an ImuSpec or None.
+        The scene's bodies; ``imu`` is an ImuSpec or None.
     bodies : RigidBodies
-        The same bodies.
+        The same bodies, as the world holds them.
     gravity : (3,) float or None
-        The scene's gravitational acceleration, m/s^2, world axes.
+        The scene's gravitational acceleration, m/s^2, world frame.
+
+    Returns
+    -------
+    Imus or None
+        None when no body declares an IMU.
     """
     mounted = [(index, body.imu) for index, body in enumerate(scene_bodies)
                if body.imu is not None]

@@ -15,7 +15,7 @@ import pytest
 
 @pytest.fixture
 def rigid_sim_context(monkeypatch):
-    """Give a fresh rclpy context, discovery off, on a domain picked from the process id."""
+    """Give the test a fresh rclpy context, discovery off, on a domain from the process id."""
     import rclpy
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
     context = rclpy.Context()
@@ -40,7 +40,10 @@ def rigid_sim_executor(rigid_sim_context):
 
 @pytest.fixture
 def rigid_sim(rigid_sim_context, rigid_sim_executor):
-    """Start simulations in a test: call the fixture with scene= or yaml=, and parameters."""
+    """Give the test a starter of simulations.
+
+    Call it with a scene and parameters: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``.
+    """
     from rigid_sim.testing import Simulation
     made = []
 

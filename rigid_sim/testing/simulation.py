@@ -79,7 +79,7 @@ class Simulation:
         self._nodes = []
 
     def create_node(self, name, **kwargs):
-        """Make an rclpy Node in the simulation's context, spun by its executor."""
+        """Create an rclpy Node in the simulation's context, spun by its executor."""
         node = Node(name, context=self.context, **kwargs)
         self.executor.add_node(node)
         self._nodes.append(node)
