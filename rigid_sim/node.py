@@ -126,9 +126,6 @@ class RigidSimNode(Node):
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
         self._warn_on_slow_ticks_for_imus()
-        # Pace and measure from now: no tick is owed for the wall time the warm-up took.
-        self.loop.set_rate(self.settings.rate)
-        self.health.restart(self.world.time)
 
     @property
     def paused(self):

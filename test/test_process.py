@@ -153,10 +153,10 @@ def run_lockstep(node, executor, cwd, calls, step_ticks=5):
 
 
 def test_lockstep_from_another_process_gives_bit_identical_poses(probe, tmp_path):
-    """Lockstep from another process gives bit identical poses.
+    """Two runs of the default scene driven by ~/step alone give bit-identical poses.
 
-    Two runs of the default scene driven by ~/step alone (rate 0, started paused): the same times,
-    k x 5 ticks x 0.01 s, and bit for bit the same poses after every call.
+    Both run at rate 0, started paused: the same times, k x 5 ticks x 0.01 s, and bit for
+    bit the same poses after every call.
     """
     node, executor = probe
     first = run_lockstep(node, executor, tmp_path, calls=8)
