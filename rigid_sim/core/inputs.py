@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from rigid_sim.core import kinematics as kin
-from rigid_sim.core.effects.base import kernel_for
+from rigid_sim.core.effects.base import body_kernel_for
 
 FRAMES = ('world', 'body', 'point', 'world_point')
 DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
@@ -58,7 +58,9 @@ class WrenchInputs(NamedTuple):
     world_sum: np.ndarray    # (N, 6) world-axes force (N) and torque (N m) per body
     body_sum: np.ndarray     # (N, 6) body-axes force and torque per body
     body_held: np.ndarray    # (N,) bool: the body holds a body-axes wrench
-    point_body: np.ndarray   # (K,) int, body of each world_point force
+    # The K world_point forces in order of body: body i's are rows
+    # point_start[i]:point_start[i + 1] of
+    point_start: np.ndarray  # (N + 1,) int
     point_lever: np.ndarray  # (K, 3) m, body axes, from its centre of mass to the point
     point_force: np.ndarray  # (K, 3) N, world axes
 
@@ -194,10 +196,13 @@ class AppliedWrenches:
 
     def _refresh(self):
         """Rebuild the kernel's arrays after the world_point holdings changed (the sums stay)."""
-        at_points = list(self._at_points.values())
+        # A stable sort: each body's forces keep the order they came in.
+        at_points = sorted(self._at_points.values(), key=lambda held: held.body)
+        counts = np.bincount(np.array([w.body for w in at_points], dtype=np.int64),
+                             minlength=self._bodies.count)
         self._parameters = WrenchInputs(
             self._sums['world'], self._sums['body'], self._body_held,
-            np.array([w.body for w in at_points], dtype=np.int64),
+            np.concatenate(([0], np.cumsum(counts))).astype(np.int64),
             np.array([w.lever for w in at_points], dtype=float).reshape(-1, 3),
             np.array([w.force for w in at_points], dtype=float).reshape(-1, 3))
         self._points_stale = False
@@ -216,24 +221,18 @@ class AppliedWrenches:
                 for key, w in wrenches.items()}
 
 
-@kernel_for(WrenchInputs)
+@body_kernel_for(WrenchInputs)
 @njit(cache=True)
-def wrench_input(p, y, time, model, force, torque):
-    """Add the held wrenches to ``force`` and ``torque`` (N, 3) at the packed state ``y``."""
-    for i in range(y.shape[0]):
-        for k in range(3):
-            force[i, k] += p.world_sum[i, k]
-            torque[i, k] += p.world_sum[i, 3 + k]
+def wrench_input(p, i, x, q, momentum, big_l, time, model):
+    """Body ``i``'s held wrenches, world axes, about its centre of mass, at quaternion ``q``."""
+    force = kin.vector(p.world_sum, i, 0)
+    torque = kin.vector(p.world_sum, i, 3)
+    if p.body_held[i] or p.point_start[i] < p.point_start[i + 1]:
+        r = kin.matrix(q)
         if p.body_held[i]:
-            r = kin.matrix(kin.orientation(y, i))
-            kin_force = kin.rotate(r, kin.vector(p.body_sum, i, 0))
-            kin_torque = kin.rotate(r, kin.vector(p.body_sum, i, 3))
-            for k in range(3):
-                force[i, k] += kin_force[k]
-                torque[i, k] += kin_torque[k]
-    for j in range(p.point_body.size):
-        i = p.point_body[j]
-        arm = kin.rotate(kin.matrix(kin.orientation(y, i)), kin.vector(p.point_lever, j, 0))
-        moment = kin.cross(arm, kin.vector(p.point_force, j, 0))
-        for k in range(3):
-            torque[i, k] += moment[k]
+            force = kin.add(force, kin.rotate(r, kin.vector(p.body_sum, i, 0)))
+            torque = kin.add(torque, kin.rotate(r, kin.vector(p.body_sum, i, 3)))
+        for j in range(p.point_start[i], p.point_start[i + 1]):
+            arm = kin.rotate(r, kin.vector(p.point_lever, j, 0))
+            torque = kin.add(torque, kin.cross(arm, kin.vector(p.point_force, j, 0)))
+    return force, torque

@@ -6,7 +6,9 @@ An effect subclasses :class:`~rigid_sim.core.effects.base.Effect` (which holds t
 and declares
 
 ``parameters``
-    its arrays, as a NamedTuple class of its own whose compiled kernel it registers with
+    its arrays, as a NamedTuple class of its own whose compiled kernel it registers: with
+    :func:`~rigid_sim.core.effects.base.body_kernel_for` when a body's wrench depends only
+    on that body's state, else (it couples bodies) with
     :func:`~rigid_sim.core.effects.base.kernel_for`;
 ``torqued`` : (N,) bool
     which bodies it may apply a torque to (the rest stay torque-free, which lets

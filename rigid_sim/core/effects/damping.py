@@ -11,7 +11,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rigid_sim.core.effects.base import Effect, kernel_for
+from rigid_sim.core.effects.base import Effect, body_kernel_for
 
 
 class DampingParameters(NamedTuple):
@@ -42,11 +42,10 @@ class Damping(Effect):
         return max(self.linear, self.angular)
 
 
-@kernel_for(DampingParameters)
+@body_kernel_for(DampingParameters)
 @njit(cache=True)
-def damping_wrench(parameters, y, time, model, force, torque):
-    """Add ``-c_lin P`` to ``force`` and ``-c_ang L`` to ``torque`` (N, 3)."""
-    for i in range(y.shape[0]):
-        for k in range(3):
-            force[i, k] -= parameters.linear * y[i, 7 + k]
-            torque[i, k] -= parameters.angular * y[i, 10 + k]
+def damping_wrench(parameters, i, x, q, p, big_l, time, model):
+    """``-c_lin P`` and ``-c_ang L`` of one body."""
+    linear, angular = parameters.linear, parameters.angular
+    return (-linear * p[0], -linear * p[1], -linear * p[2]), \
+        (-angular * big_l[0], -angular * big_l[1], -angular * big_l[2])

@@ -6,7 +6,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rigid_sim.core.effects.base import Effect, kernel_for
+from rigid_sim.core.effects.base import Effect, body_kernel_for
 from rigid_sim.core.state import POSITION
 
 
@@ -34,11 +34,9 @@ class Gravity(Effect):
         return -float(np.sum(self._weight * snapshot.y[:, POSITION]))
 
 
-@kernel_for(GravityParameters)
+@body_kernel_for(GravityParameters)
 @njit(cache=True)
-def gravity_wrench(parameters, y, time, model, force, torque):
-    """Add each body's weight to ``force`` (N, 3)."""
+def gravity_wrench(parameters, i, x, q, p, big_l, time, model):
+    """Body ``i``'s weight, at its centre of mass: no torque."""
     weight = parameters.weight
-    for i in range(y.shape[0]):
-        for k in range(3):
-            force[i, k] += weight[i, k]
+    return (weight[i, 0], weight[i, 1], weight[i, 2]), (0.0, 0.0, 0.0)
