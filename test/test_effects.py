@@ -255,6 +255,31 @@ def test_wrench_frames():
                                    err_msg=frame)
 
 
+def test_world_point_forces_act_on_their_own_bodies_whatever_order_they_came_in():
+    """Forces held at world points on both bodies, interleaved, one replaced and one dropped.
+
+    Each body's torque is the sum over the forces it still holds of R (p - c) x f (its
+    world force, the sum of its f), whatever the order the holds came in.
+    """
+    world, wrenches = pushed()
+    holds = [(1, 'a', [1.0, 0.0, 0.0], [0.3, 0.1, -0.2]), (0, 'a', [0.0, 2.0, 0.0], [0.1, 0, 0]),
+             (1, 'b', [0.0, 0.0, -1.5], [-0.2, 0.4, 0.1]), (0, 'b', [0.5, 0.5, 0.0], [0, 0, 0.3]),
+             (1, 'a', [0.0, -1.0, 0.5], [0.2, 0.2, 0.2])]   # replaces body 1's first
+    for body, key, force, point in holds:
+        wrenches.hold(body, key, 'world_point', force, point=point)
+    wrenches.release(0, 'a')
+    held = {(1, 'a'): holds[4], (1, 'b'): holds[2], (0, 'b'): holds[3]}
+    force, torque = world.wrench(world.snapshot())
+    for body in (0, 1):
+        expected_force, expected_torque = np.zeros(3), np.zeros(3)
+        for (owner, _), (_, _, f, point) in held.items():
+            if owner == body:
+                expected_force += f
+                expected_torque += np.cross(TILT.apply(np.subtract(point, COM)), f)
+        np.testing.assert_allclose(force[body], expected_force, atol=1e-15)
+        np.testing.assert_allclose(torque[body], expected_torque, atol=1e-15)
+
+
 @pytest.mark.parametrize('body, frame, force, torque', [
     (0, 'world', [np.nan, 0.0, 0.0], [0.0, 0.0, 0.0]),
     (0, 'body', [0.0, 0.0, 0.0], [0.0, np.inf, 0.0]),
