@@ -43,11 +43,12 @@ def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, grav
     """
     for k in range(q.shape[0]):
         turn = kin.matrix(kin.normalize(kin.orientation_row(q, k)))
-        om = kin.apply(inertia_inv[k], kin.rotate_inverse(turn, kin.vector(momentum, k, 0)))
+        inverse = kin.entries(inertia_inv, k)
+        om = kin.rotate(inverse, kin.rotate_inverse(turn, kin.vector(momentum, k, 0)))
         turned = kin.rotate_inverse(turn, kin.vector(torque, k, 0))
-        gyroscopic = kin.cross(om, kin.apply(inertia[k], om))
-        alpha = kin.apply(inertia_inv[k], (turned[0] - gyroscopic[0], turned[1] - gyroscopic[1],
-                                           turned[2] - gyroscopic[2]))
+        gyroscopic = kin.cross(om, kin.rotate(kin.entries(inertia, k), om))
+        alpha = kin.rotate(inverse, (turned[0] - gyroscopic[0], turned[1] - gyroscopic[1],
+                                     turned[2] - gyroscopic[2]))
         r = kin.vector(lever, k, 0)
         f, m = kin.vector(force, k, 0), mass[k]
         per_mass = (f[0] / m - gravity[0], f[1] / m - gravity[1], f[2] / m - gravity[2])

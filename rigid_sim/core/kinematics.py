@@ -30,7 +30,7 @@ def matrix(q):
 
 @njit(cache=True)
 def rotate(r, v):
-    """``R v`` for a 9-tuple ``R`` and a 3-tuple ``v``."""
+    """``R v`` for a row-major 9-tuple ``R`` (a rotation, or an inertia from :func:`entries`)."""
     return (r[0] * v[0] + r[1] * v[1] + r[2] * v[2],
             r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
             r[6] * v[0] + r[7] * v[1] + r[8] * v[2])
@@ -42,14 +42,6 @@ def rotate_inverse(r, v):
     return (r[0] * v[0] + r[3] * v[1] + r[6] * v[2],
             r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
             r[2] * v[0] + r[5] * v[1] + r[8] * v[2])
-
-
-@njit(cache=True)
-def apply(m, v):
-    """``M v`` for a (3, 3) array ``M`` and a 3-tuple ``v``."""
-    return (m[0, 0] * v[0] + m[0, 1] * v[1] + m[0, 2] * v[2],
-            m[1, 0] * v[0] + m[1, 1] * v[1] + m[1, 2] * v[2],
-            m[2, 0] * v[0] + m[2, 1] * v[1] + m[2, 2] * v[2])
 
 
 @njit(cache=True)
@@ -152,8 +144,8 @@ def angular_velocity(r, inertia_inv, angular_momentum):
     ----------
     r : 9-tuple of float
         Rotation matrix ``R``, body to world, row-major.
-    inertia_inv : (3, 3) float
-        Inverse body-frame inertia ``I_body^-1``, 1/(kg m^2).
+    inertia_inv : 9-tuple of float
+        Inverse body-frame inertia ``I_body^-1``, 1/(kg m^2), row-major (:func:`entries`).
     angular_momentum : 3-tuple of float
         Angular momentum ``L``, kg m^2/s, world axes.
 
@@ -162,7 +154,7 @@ def angular_velocity(r, inertia_inv, angular_momentum):
     3-tuple of float
         Angular velocity, rad/s, world axes.
     """
-    return rotate(r, apply(inertia_inv, rotate_inverse(r, angular_momentum)))
+    return rotate(r, rotate(inertia_inv, rotate_inverse(r, angular_momentum)))
 
 
 @njit(cache=True)
@@ -170,7 +162,7 @@ def angular_velocities(y, inertia_inv, out):
     """``omega`` (N, 3) of every body of the packed state ``y`` (N, 13) into ``out``."""
     for i in range(y.shape[0]):
         r = matrix(orientation(y, i))
-        store(out, i, 0, angular_velocity(r, inertia_inv[i], vector(y, i, 10)))
+        store(out, i, 0, angular_velocity(r, entries(inertia_inv, i), vector(y, i, 10)))
     return out
 
 
@@ -218,7 +210,7 @@ def largest_spin(y, inertia_inv, covered, held, everyone):
     for i in range(y.shape[0]):
         if everyone or covered[i] or held[i]:
             r = matrix(orientation(y, i))
-            body = apply(inertia_inv[i], rotate_inverse(r, vector(y, i, 10)))
+            body = rotate(entries(inertia_inv, i), rotate_inverse(r, vector(y, i, 10)))
             largest = max(largest, dot(body, body))
     return math.sqrt(largest)
 

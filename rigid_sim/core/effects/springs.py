@@ -134,7 +134,8 @@ def _end(y, model, body, lever, s):
     """World position, velocity and lever ``R r`` of the end at ``lever[s]`` on ``body``."""
     position, r, arm = _end_position(y, body, lever, s)
     inverse_mass = model.inverse_mass[body]
-    omega = kin.angular_velocity(r, model.inertia_inv[body], kin.vector(y, body, 10))
+    omega = kin.angular_velocity(r, kin.entries(model.inertia_inv, body),
+                                 kin.vector(y, body, 10))
     spin = kin.cross(omega, arm)
     velocity = (y[body, 7] * inverse_mass + spin[0], y[body, 8] * inverse_mass + spin[1],
                 y[body, 9] * inverse_mass + spin[2])

@@ -86,8 +86,8 @@ def _derivative(q, momentum, angular, force, torque, inertia_inv, inverse_mass, 
         turned = kin.rotate_inverse(r, torque)
         gyroscopic = kin.cross(angular, omega_body)   # L_b x omega_b = -omega_b x L_b
         dl = kin.add(turned, gyroscopic)
-    else:   # omega = R I_body^-1 R^T L
-        omega = kin.rotate(r, kin.rotate(inertia_inv, kin.rotate_inverse(r, angular)))
+    else:
+        omega = kin.angular_velocity(r, inertia_inv, angular)
         dq = kin.multiply((omega[0], omega[1], omega[2], 0.0), q)
         dl = torque
     dx = (momentum[0] * inverse_mass, momentum[1] * inverse_mass, momentum[2] * inverse_mass)

@@ -19,7 +19,8 @@ def _kick_drift(y, model, force, torque, h):
             y[i, 10 + k] += h * torque[i, k]
         q = kin.orientation(y, i)
         r = kin.matrix(q)
-        omega = kin.angular_velocity(r, model.inertia_inv[i], kin.vector(y, i, 10))
+        omega = kin.angular_velocity(r, kin.entries(model.inertia_inv, i),
+                                     kin.vector(y, i, 10))
         for k in range(3):
             y[i, k] += y[i, 7 + k] * (h * model.inverse_mass[i])
         turn = kin.exp_map((omega[0] * h, omega[1] * h, omega[2] * h))
