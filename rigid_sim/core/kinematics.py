@@ -66,8 +66,9 @@ def plus_scaled4(u, a, v):
 def entries(m, i):
     """9-tuple (row-major) of the 3x3 matrix ``m[i]`` of an (N, 3, 3) array, without a view.
 
-    A view of ``m[i]`` takes and drops a reference to ``m``'s memory each time it is made:
-    in a kernel that makes one per body and stage, that was ~40 % of an RK4 step.
+    A view of ``m[i]`` takes and drops a reference to ``m``'s memory each time it is made,
+    a cost a kernel that makes one per body and stage pays every time (docs/performance.md,
+    "A body at a time").
     """
     return (m[i, 0, 0], m[i, 0, 1], m[i, 0, 2], m[i, 1, 0], m[i, 1, 1], m[i, 1, 2],
             m[i, 2, 0], m[i, 2, 1], m[i, 2, 2])

@@ -160,9 +160,9 @@ def body_wrench(effects, i, x, q, p, big_l, time, model):
     """
 
 
-# Inlined into the caller's IR, as is _body_one: called as separate functions, the nested
-# calls cost ~500 ns a body (the effects' arrays passed and reference-counted at each), inline
-# ~7 ns (rigid_sim_bench throughput, N = 1e4).
+# Inlined into the caller's IR, as is _body_one: as separate functions, every nested call
+# passed and reference-counted the effects' arrays, for every body and stage, which made
+# the sum some 70 times slower (docs/performance.md, "A body at a time").
 @overload(body_wrench, inline='always')
 def _body_wrench_overload(effects, i, x, q, p, big_l, time, model):
     def total(effects, i, x, q, p, big_l, time, model):

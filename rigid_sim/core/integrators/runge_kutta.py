@@ -236,7 +236,8 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_ax
     :func:`_runge_kutta` does for it, so the two agree to the last bit. Returns the failure
     code of the earliest bad substep over the bodies (the first such body's sign), as
     :func:`_runge_kutta` does. One function on purpose: a call per body, even inlined, took
-    and dropped references to every array of ``model`` and ``effects`` (~80 ns a body).
+    and dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
+    "A body at a time").
     """
     first = 0
     for i in range(y.shape[0]):
