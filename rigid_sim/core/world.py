@@ -140,11 +140,12 @@ class World:
     def _plan_from_here(self, dt):
         """Substeps and reason for a step of ``dt`` from the current state.
 
-        The check at the end of the last step planned it already (~1 us at one body) when
-        nothing it read has changed since: the state, ``dt``, the inputs held and the count
-        kept (this step's current count is the count that check was given).
+        The check at the end of the last step planned it already (the dearest part of a
+        one-body step after the kernel) when nothing it read has changed since: the state,
+        ``dt``, the inputs held and the count kept (this step's current count is the count
+        that check was given).
         """
-        planned = self._next_plan
+        planned, self._next_plan = self._next_plan, None   # good for one step only
         if (planned is not None and planned[0] is self._y and planned[1] == dt
                 and planned[2] == self.inputs.version):
             return planned[3], planned[4]
