@@ -17,7 +17,7 @@ from rigid_sim.core.effects.base import acts_per_body
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.inputs import AppliedWrenches
-from rigid_sim.core.integrators import runge_kutta
+from rigid_sim.core.integrators import make_integrator, runge_kutta
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
@@ -77,6 +77,29 @@ def test_guard_sees_a_wrench_held_between_steps():
     assert world.diagnostics.substeps == 1
 
 
+def test_guard_plans_afresh_for_an_integrator_swapped_between_steps():
+    """A torqued body spinning at |omega| dt = 0.2: four times exact_split's bound, under rk4's.
+
+    Stepped with rk4 it takes one substep; once the world's integrator is swapped for
+    exact_split (as the node does when its parameter changes), the very next step plans its
+    split before it starts, not only when the end-of-step check finds the bound broken.
+    """
+    bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
+                         np.zeros((1, 3)))
+    y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
+                      [[0.0, 0.0, 20.0]])
+    wrenches = AppliedWrenches(bodies)
+    wrenches.hold(0, 'push', 'body', (0.0, 0.0, 0.0), (0.0, 0.0, 0.1))
+    world = World(bodies, y, [], 'rk4', inputs=wrenches)
+    world.step(0.01)
+    assert world.diagnostics.substeps == 1
+    world.integrator = make_integrator('exact_split', world, 1e-6)
+    world.step(0.01)
+    assert world.diagnostics.substeps > 1
+    assert 'exact_split' in world.diagnostics.reason
+    assert 'reached during the step' not in world.diagnostics.reason
+
+
 def _per_body_scene():
     """Six bodies under gravity and damping, holding wrenches of every kind: a World's parts.
 
@@ -114,6 +137,8 @@ def test_runge_kutta_a_body_at_a_time_equals_stage_by_stage(name, staged):
     bodies, y, effects, wrenches = _per_body_scene()
     world = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     assert acts_per_body(world.effect_parameters())
+    assert world.integrator._kernel._dispatcher in (
+        runge_kutta.body_axes_runge_kutta_per_body, runge_kutta.world_axes_runge_kutta_per_body)
     dt, substeps = 0.05, 3
     assert world.integrator.advance(world.y, 0.0, dt, substeps) == 0
     expected = y.copy()

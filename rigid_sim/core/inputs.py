@@ -59,7 +59,7 @@ class WrenchInputs(NamedTuple):
     body_sum: np.ndarray     # (N, 6) body-axes force and torque per body
     body_held: np.ndarray    # (N,) bool: the body holds a body-axes wrench
     # The K world_point forces in order of body: body i's are rows
-    # point_start[i]:point_start[i + 1] of
+    # point_start[i]:point_start[i + 1] of point_lever and point_force.
     point_start: np.ndarray  # (N + 1,) int
     point_lever: np.ndarray  # (K, 3) m, body axes, from its centre of mass to the point
     point_force: np.ndarray  # (K, 3) N, world axes

@@ -127,7 +127,7 @@ class World:
                 substeps, reason = grown, why + ' (reached during the step)'
                 y = self._attempt(dt, substeps)
             else:   # the plan a step of dt from y will make, unless y or the inputs change
-                self._next_plan = (y, dt, self.inputs.version, grown, why)
+                self._next_plan = (y, dt, self.inputs.version, self.integrator, grown, why)
         diagnostics = self.diagnostics
         diagnostics.substeps, diagnostics.reason = substeps, reason
         if y is None:
@@ -142,13 +142,15 @@ class World:
 
         The check at the end of the last step planned it already (the dearest part of a
         one-body step after the kernel) when nothing it read has changed since: the state,
-        ``dt``, the inputs held and the count kept (this step's current count is the count
-        that check was given).
+        ``dt``, the inputs held, the integrator (the node swaps it at runtime), the guard
+        being on and the count kept (this step's current count is the count that check was
+        given).
         """
         planned, self._next_plan = self._next_plan, None   # good for one step only
         if (planned is not None and planned[0] is self._y and planned[1] == dt
-                and planned[2] == self.inputs.version):
-            return planned[3], planned[4]
+                and planned[2] == self.inputs.version and planned[3] is self.integrator
+                and self.auto_substep):
+            return planned[4], planned[5]
         return self._plan(self._y, dt, self.diagnostics.substeps)
 
     def _plan(self, y, dt, current):
