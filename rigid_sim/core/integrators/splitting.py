@@ -28,7 +28,7 @@ from numba import njit
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
 from rigid_sim.core.dispatch import CompiledCall
-from rigid_sim.core.effects.base import accumulate
+from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import CLASSICAL_RK4, EXPLICIT_MIDPOINT
@@ -75,27 +75,41 @@ def dlm_rotation(moments, momentum, q, h):
 
 
 @njit(cache=True)
+def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
+    """One body's free motion for ``h``: its new ``x``, ``q`` and world ``L`` (tuples).
+
+    Straight-line translation and torque-free rotation. ``principal`` (4-tuple) turns the
+    principal axes into the body frame, ``moments`` (3-tuple) are the principal moments.
+    Scalars and tuples only: no array passes, so a call costs no reference counting.
+    """
+    x = (x[0] + p[0] * (h * inverse_mass), x[1] + p[1] * (h * inverse_mass),
+         x[2] + p[2] * (h * inverse_mass))
+    # Bodies whose frames are already principal skip two quaternion products.
+    identity = principal == (0.0, 0.0, 0.0, 1.0)
+    if not identity:
+        q = kin.multiply(q, principal)
+    momentum = kin.rotate_inverse(kin.matrix(q), big_l)
+    if drift == EXACT_DRIFT:
+        momentum, q = free_flow(moments, momentum, q, h)
+    else:
+        momentum, q = dlm_rotation(moments, momentum, q, h)
+    big_l = kin.rotate(kin.matrix(q), momentum)
+    if not identity:
+        q = kin.multiply(q, kin.conjugate(principal))
+    return x, q, big_l
+
+
+@njit(cache=True)
 def _drift(y, model, h, drift):
-    """Free motion for ``h``: straight-line translation and torque-free rotation, in place."""
+    """Free motion for ``h`` of every body, in place."""
     for i in range(y.shape[0]):
-        for k in range(3):
-            y[i, k] += y[i, 7 + k] * (h * model.inverse_mass[i])
-        principal = kin.orientation_row(model.principal, i)
-        # Bodies whose frames are already principal skip two quaternion products.
-        identity = principal == (0.0, 0.0, 0.0, 1.0)
-        q = kin.orientation(y, i)
-        if not identity:
-            q = kin.multiply(q, principal)
-        momentum = kin.rotate_inverse(kin.matrix(q), kin.vector(y, i, 10))
-        moments = kin.vector(model.moments, i, 0)
-        if drift == EXACT_DRIFT:
-            momentum, q = free_flow(moments, momentum, q, h)
-        else:
-            momentum, q = dlm_rotation(moments, momentum, q, h)
-        kin.store(y, i, 10, kin.rotate(kin.matrix(q), momentum))
-        if not identity:
-            q = kin.multiply(q, kin.conjugate(principal))
+        x, q, big_l = _drift_body(kin.vector(y, i, 0), kin.orientation(y, i),
+                                  kin.vector(y, i, 7), kin.vector(y, i, 10),
+                                  model.inverse_mass[i], kin.orientation_row(model.principal, i),
+                                  kin.vector(model.moments, i, 0), h, drift)
+        kin.store(y, i, 0, x)
         kin.store(y, i, 3, q)
+        kin.store(y, i, 10, big_l)
 
 
 @njit(cache=True)
@@ -156,6 +170,51 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
     return 0
 
 
+@njit(cache=True)
+def _strang_per_body(y, model, effects, time, h, substeps, weights, drift):
+    """:func:`_strang_composition` for momentum-free effects that each act on one body.
+
+    Each body goes through all its substeps, kicks and drifts in registers, with the
+    arithmetic :func:`_strang_composition` does for it, so the two agree to the last bit;
+    the failure code is that of the earliest bad substep over the bodies (the first such
+    body's sign), as there. A kick called per body with arrays took and dropped references
+    to every array of ``model`` and ``effects``, so the wrench is inlined here
+    (docs/performance.md, "A body at a time").
+    """
+    first = 0
+    for i in range(y.shape[0]):
+        x, q, p, big_l = (kin.vector(y, i, 0), kin.orientation(y, i), kin.vector(y, i, 7),
+                          kin.vector(y, i, 10))
+        inverse_mass = model.inverse_mass[i]
+        principal = kin.orientation_row(model.principal, i)
+        moments = kin.vector(model.moments, i, 0)
+        for k in range(substeps):
+            t = time + k * h
+            # Kick j is by the mean of the fractions before and after it (none: 0).
+            for j in range(weights.size + 1):
+                before = weights[j - 1] if j > 0 else 0.0
+                after = weights[j] if j < weights.size else 0.0
+                step = 0.5 * (before + after) * h
+                force, torque = body_wrench(effects, i, x, q, p, big_l, t, model)
+                p = kin.plus_scaled(p, step, force)
+                big_l = kin.plus_scaled(big_l, step, torque)
+                if j < weights.size:
+                    x, q, big_l = _drift_body(x, q, p, big_l, inverse_mass, principal,
+                                              moments, weights[j] * h, drift)
+                    t += weights[j] * h
+            q = kin.normalize(q)
+            code = kin.check_body(x, q, p, big_l)
+            if code != 0:
+                if first == 0 or k + 1 < abs(first):
+                    first = code * (k + 1)
+                break
+        kin.store(y, i, 0, x)
+        kin.store(y, i, 3, q)
+        kin.store(y, i, 7, p)
+        kin.store(y, i, 10, big_l)
+    return first
+
+
 # One kernel per drift, the choice a constant inside, so the per-body branch compiles away.
 @njit(cache=True)
 def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
@@ -171,6 +230,26 @@ def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_
     """:func:`_strang_composition` drifting with the DLM rotations."""
     return _strang_composition(y, work, model, effects, time, h, substeps, weights,
                                velocity_dependent, a, b, DLM_DRIFT)
+
+
+@njit(cache=True)
+def exact_flow_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
+                                  velocity_dependent, a, b):
+    """:func:`_strang_per_body` with the exact free flow (``work``, ``a``, ``b`` unused)."""
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, EXACT_DRIFT)
+
+
+@njit(cache=True)
+def dlm_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
+                           velocity_dependent, a, b):
+    """:func:`_strang_per_body` drifting with the DLM rotations (``work``, ``a``, ``b`` unused)."""
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, DLM_DRIFT)
+
+
+# (drift, per body) -> kernel
+_KERNELS = {(EXACT_DRIFT, False): exact_flow_splitting, (DLM_DRIFT, False): dlm_splitting,
+            (EXACT_DRIFT, True): exact_flow_splitting_per_body,
+            (DLM_DRIFT, True): dlm_splitting_per_body}
 
 
 class StrangSplitting(Integrator):
@@ -189,10 +268,13 @@ class StrangSplitting(Integrator):
         self._kick_tableau = (a, b)
         kicks = len(self.weights) + 1
         self.evaluations_per_step = kicks * (b.size if system.velocity_dependent else 1)
-        self._work = (np.empty((count, 6)), np.empty((b.size, count, 6)), self._force,
-                      self._torque)
-        self._kernel = CompiledCall(exact_flow_splitting if self.drift == EXACT_DRIFT
-                                    else dlm_splitting)
+        # Kicks that need no momenta, from effects that each act on one body, let a body go
+        # through a whole step in registers: no passes over the state and no scratch arrays.
+        per_body = (acts_per_body(system.effect_parameters())
+                    and not system.velocity_dependent)
+        self._work = () if per_body else (np.empty((count, 6)), np.empty((b.size, count, 6)),
+                                          self._force, self._torque)
+        self._kernel = CompiledCall(_KERNELS[self.drift, per_body])
 
     def _advance(self, y, time, h, substeps):
         a, b = self._kick_tableau
