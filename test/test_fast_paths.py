@@ -202,21 +202,23 @@ def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, staged):
     assert not np.array_equal(world.y, y)
 
 
-@pytest.mark.parametrize('bad_body, position, momentum, code', [
-    (3, 1.78e308, 8e307, 2), (2, 0.0, np.inf, 1)])
-def test_splitting_a_body_at_a_time_reports_the_first_bad_substep(
-        bad_body, position, momentum, code):
+@pytest.mark.parametrize('bad, code', [
+    ({3: (1.78e308, 8e307)}, 2), ({2: (0.0, np.inf)}, 1),
+    ({2: (1.78e308, 6e307), 4: (0.0, np.inf)}, 1)])
+def test_splitting_a_body_at_a_time_reports_the_first_bad_substep(bad, code):
     """A body that goes bad fails the step with the kick-by-kick kernel's code.
 
     Body 3 (2 kg) at x = 1.78e308 m moving at 4e307 m/s gains 1e306 m per substep of
     0.025 s: still finite after the first, beyond the largest double after the second
-    (code 2). Body 2 with infinite momentum is non-finite in the first (code 1).
+    (code 2). A body with infinite momentum is non-finite in the first (code 1). With body 2
+    going bad in the second substep and body 4 in the first, the earliest substep over the
+    bodies wins, not the first body's.
     """
     bodies, y, effects, wrenches = _per_body_scene(damped=False)
     world = World(bodies, y, effects, 'exact_split', auto_substep=False, inputs=wrenches)
     state = world.y.copy()
-    state[bad_body, 0] = position
-    state[bad_body, 7] = momentum
+    for body, (position, momentum) in bad.items():
+        state[body, 0], state[body, 7] = position, momentum
     expected = state.copy()
     got = world.integrator.advance(state, 0.0, 0.1, 4)
     a, b, _ = world.integrator.kick_tableau.arrays()
