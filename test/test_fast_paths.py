@@ -174,18 +174,20 @@ def test_runge_kutta_a_body_at_a_time_reports_the_first_bad_substep():
     assert code == 1
 
 
+@pytest.mark.parametrize('damped', [False, True])
 @pytest.mark.parametrize('name, staged', [
     ('exact_split', splitting.exact_flow_splitting),
     ('exact_split4', splitting.exact_flow_splitting),
     ('dlm', splitting.dlm_splitting),
     ('dlm4', splitting.dlm_splitting)])
-def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, staged):
-    """Undamped per-body effects: each body goes through its kicks and drifts in registers.
+def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, staged, damped):
+    """Per-body effects: each body goes through its kicks and drifts in registers.
 
     Three substeps of that give the very bits the kernel that kicks and drifts all bodies in
-    turn (the one springs and dampers need) gives from the same state.
+    turn (the one springs need) gives from the same state, with one evaluation a kick or,
+    damped, the Runge-Kutta kick of the method's order.
     """
-    bodies, y, effects, wrenches = _per_body_scene(damped=False)
+    bodies, y, effects, wrenches = _per_body_scene(damped=damped)
     world = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     assert world.integrator._kernel._dispatcher in (
         splitting.exact_flow_splitting_per_body, splitting.dlm_splitting_per_body)
@@ -196,8 +198,9 @@ def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, staged):
     work = (np.empty((COUNT, 6)), np.empty((b.size, COUNT, 6)), np.empty((COUNT, 3)),
             np.empty((COUNT, 3)))
     weights = np.array(world.integrator.weights)
+    assert world.velocity_dependent == damped
     assert staged(expected, work, bodies.model, world.effect_parameters(), 0.0,
-                  dt / substeps, substeps, weights, False, a, b) == 0
+                  dt / substeps, substeps, weights, damped, a, b) == 0
     np.testing.assert_array_equal(world.y, expected)
     assert not np.array_equal(world.y, y)
 

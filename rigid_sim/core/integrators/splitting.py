@@ -31,7 +31,8 @@ from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.free_rotation import free_flow
-from rigid_sim.core.integrators.runge_kutta import CLASSICAL_RK4, EXPLICIT_MIDPOINT
+from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
+                                                    FORWARD_EULER)
 
 # Yoshida (1990) weights: w1 + w0 + w1 = 1 and w1^3 + w0^3 + w1^3 = 0 cancel the h^3 error.
 YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
@@ -171,12 +172,15 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
 
 
 @njit(cache=True)
-def _strang_per_body(y, model, effects, time, h, substeps, weights, drift):
-    """:func:`_strang_composition` for momentum-free effects that each act on one body.
+def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift):
+    """:func:`_strang_composition` for effects that each act on one body.
 
     Each body goes through all its substeps, kicks and drifts in registers, with the
-    arithmetic :func:`_strang_composition` does for it, so the two agree to the last bit;
-    the failure code is that of the earliest bad substep over the bodies (the first such
+    arithmetic :func:`_strang_composition` does for it, so the two agree to the last bit.
+    A kick is the Runge-Kutta method whose stages each use only the slope before (``a`` its
+    subdiagonal, ``b`` its weights): one stage of weight 1 when no effect depends on the
+    momenta, which is then the single evaluation of the other kernel. The failure code is
+    that of the earliest bad substep over the bodies (the first such
     body's sign), as there. A kick called per body with arrays took and dropped references
     to every array of ``model`` and ``effects``, so the wrench is inlined here
     (docs/performance.md, "A body at a time").
@@ -195,9 +199,15 @@ def _strang_per_body(y, model, effects, time, h, substeps, weights, drift):
                 before = weights[j - 1] if j > 0 else 0.0
                 after = weights[j] if j < weights.size else 0.0
                 step = 0.5 * (before + after) * h
-                force, torque = body_wrench(effects, i, x, q, p, big_l, t, model)
-                p = kin.plus_scaled(p, step, force)
-                big_l = kin.plus_scaled(big_l, step, torque)
+                stage_p, stage_l = p, big_l
+                start_p, start_l = p, big_l
+                for stage in range(b.size):   # at fixed x, q and t
+                    force, torque = body_wrench(effects, i, x, q, stage_p, stage_l, t, model)
+                    p = kin.plus_scaled(p, step * b[stage], force)
+                    big_l = kin.plus_scaled(big_l, step * b[stage], torque)
+                    if stage + 1 < b.size:
+                        stage_p = kin.plus_scaled(start_p, step * a[stage + 1], force)
+                        stage_l = kin.plus_scaled(start_l, step * a[stage + 1], torque)
                 if j < weights.size:
                     x, q, big_l = _drift_body(x, q, p, big_l, inverse_mass, principal,
                                               moments, weights[j] * h, drift)
@@ -235,15 +245,15 @@ def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_
 @njit(cache=True)
 def exact_flow_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
                                   velocity_dependent, a, b):
-    """:func:`_strang_per_body` with the exact free flow (``work``, ``a``, ``b`` unused)."""
-    return _strang_per_body(y, model, effects, time, h, substeps, weights, EXACT_DRIFT)
+    """:func:`_strang_per_body` with the exact free flow (``work`` unused)."""
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, EXACT_DRIFT)
 
 
 @njit(cache=True)
 def dlm_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
                            velocity_dependent, a, b):
-    """:func:`_strang_per_body` drifting with the DLM rotations (``work``, ``a``, ``b`` unused)."""
-    return _strang_per_body(y, model, effects, time, h, substeps, weights, DLM_DRIFT)
+    """:func:`_strang_per_body` drifting with the DLM rotations (``work`` unused)."""
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, DLM_DRIFT)
 
 
 # (drift, per body) -> kernel
@@ -265,13 +275,16 @@ class StrangSplitting(Integrator):
         count = self.bodies.count
         self._weights = np.array(self.weights, dtype=float)
         a, b, _ = self.kick_tableau.arrays()
-        self._kick_tableau = (a, b)
         kicks = len(self.weights) + 1
         self.evaluations_per_step = kicks * (b.size if system.velocity_dependent else 1)
-        # Kicks that need no momenta, from effects that each act on one body, let a body go
-        # through a whole step in registers: no passes over the state and no scratch arrays.
-        per_body = (acts_per_body(system.effect_parameters())
-                    and not system.velocity_dependent)
+        # Effects that each act on one body let a body go through a whole step in registers:
+        # no passes over the state and no scratch arrays.
+        per_body = acts_per_body(system.effect_parameters())
+        self._kick_tableau = (a, b)
+        if per_body:
+            chained_a, chained_b, _ = (self.kick_tableau.chained() if system.velocity_dependent
+                                       else FORWARD_EULER.chained())
+            self._kick_tableau = (chained_a, chained_b)
         self._work = () if per_body else (np.empty((count, 6)), np.empty((b.size, count, 6)),
                                           self._force, self._torque)
         self._kernel = CompiledCall(_KERNELS[self.drift, per_body])
