@@ -162,8 +162,6 @@ class AppliedWrenches:
     def expire(self, time):
         """Drop wrenches whose hold has run out by simulated ``time``."""
         time += EXPIRY_SLACK
-        if not self._expiries or self._expiries[0][0] > time:
-            return   # every step asks; most have nothing to drop
         ended = set()
         while self._expiries and self._expiries[0][0] <= time:
             _, _, body, key, held = heapq.heappop(self._expiries)

@@ -186,6 +186,33 @@ def check_substep(y):
 
 
 @njit(cache=True)
+def body_state(y, i):
+    """Return body ``i``'s ``x``, ``q``, ``P`` and ``L`` tuples from the packed state ``y``."""
+    return vector(y, i, 0), orientation(y, i), vector(y, i, 7), vector(y, i, 10)
+
+
+@njit(cache=True)
+def store_body(y, i, x, q, p, big_l):
+    """Write body ``i``'s ``x``, ``q``, ``P`` and ``L`` tuples into the packed state ``y``."""
+    store(y, i, 0, x)
+    store(y, i, 3, q)
+    store(y, i, 7, p)
+    store(y, i, 10, big_l)
+
+
+@njit(cache=True)
+def earlier_failure(first, code, substep):
+    """Return the failure code a step reports: ``first`` (0: none) or ``code`` at ``substep``.
+
+    ``code`` (1 or -1, see :func:`check_substep`) is a body's at 1-based ``substep``; the
+    earliest substep over the bodies wins, the first body found there on ties.
+    """
+    if first == 0 or substep < abs(first):
+        return code * substep
+    return first
+
+
+@njit(cache=True)
 def check_body(x, q, p, big_l):
     """:func:`check_substep` of one body's state tuples: 0 good, 1 non-finite, -1 not unit."""
     for v in (x, p, big_l):

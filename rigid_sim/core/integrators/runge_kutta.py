@@ -241,8 +241,7 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_ax
     """
     first = 0
     for i in range(y.shape[0]):
-        x, q, p, big_l = (kin.vector(y, i, 0), kin.orientation(y, i), kin.vector(y, i, 7),
-                          kin.vector(y, i, 10))
+        x, q, p, big_l = kin.body_state(y, i)
         inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
         for k in range(substeps):
             angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
@@ -269,13 +268,9 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_ax
             big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
-                if first == 0 or k + 1 < abs(first):
-                    first = code * (k + 1)
+                first = kin.earlier_failure(first, code, k + 1)
                 break
-        kin.store(y, i, 0, x)
-        kin.store(y, i, 3, q)
-        kin.store(y, i, 7, p)
-        kin.store(y, i, 10, big_l)
+        kin.store_body(y, i, x, q, p, big_l)
     return first
 
 

@@ -180,15 +180,14 @@ def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift)
     A kick is the Runge-Kutta method whose stages each use only the slope before (``a`` its
     subdiagonal, ``b`` its weights): one stage of weight 1 when no effect depends on the
     momenta, which is then the single evaluation of the other kernel. The failure code is
-    that of the earliest bad substep over the bodies (the first such
-    body's sign), as there. A kick called per body with arrays took and dropped references
-    to every array of ``model`` and ``effects``, so the wrench is inlined here
-    (docs/performance.md, "A body at a time").
+    that of the earliest bad substep over the bodies (the first such body's sign), as there.
+    A kick called per body with arrays took and dropped references to every array of
+    ``model`` and ``effects``, so the wrench is inlined here (docs/performance.md, "A body at
+    a time").
     """
     first = 0
     for i in range(y.shape[0]):
-        x, q, p, big_l = (kin.vector(y, i, 0), kin.orientation(y, i), kin.vector(y, i, 7),
-                          kin.vector(y, i, 10))
+        x, q, p, big_l = kin.body_state(y, i)
         inverse_mass = model.inverse_mass[i]
         principal = kin.orientation_row(model.principal, i)
         moments = kin.vector(model.moments, i, 0)
@@ -215,13 +214,9 @@ def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift)
             q = kin.normalize(q)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
-                if first == 0 or k + 1 < abs(first):
-                    first = code * (k + 1)
+                first = kin.earlier_failure(first, code, k + 1)
                 break
-        kin.store(y, i, 0, x)
-        kin.store(y, i, 3, q)
-        kin.store(y, i, 7, p)
-        kin.store(y, i, 10, big_l)
+        kin.store_body(y, i, x, q, p, big_l)
     return first
 
 
