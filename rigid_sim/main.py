@@ -5,9 +5,13 @@
 SIGINT and SIGTERM stop the node cleanly (exit status 0, no traceback) at any moment. rclpy's
 own handlers are not installed: they shut the context down from the signal while a tick may
 still be publishing, which then raises ("publisher's context is invalid"). Here a signal
-while the node is built raises :class:`Stop`; once it spins, a signal only asks the loop to
-stop, so the callback running (a tick, mid-way) ends normally, and then the executor is
-left, the node destroyed and the context shut down in that order, by this thread alone.
+while the node is built (its scene loaded, its kernels compiled or loaded from numba's
+cache) ends the process at once: nothing it holds then needs an orderly release, and an
+exception raised out of that code would unwind through llvmlite's callbacks, which cannot
+pass it on and may crash on what it left half-built. Once the node spins, a signal only
+asks the loop to stop, so the callback running (a tick, mid-way) ends normally, and then the
+executor is left, the node destroyed and the context shut down in that order, by this
+thread alone.
 """
 import atexit
 import os
@@ -29,12 +33,8 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 SIGNAL_LATENCY = 0.05
 
 
-class Stop(BaseException):
-    """Raised by a stop signal; a BaseException, so no ``except Exception`` swallows it."""
-
-
 class _Stopper:
-    """The stop signals' handler: raise before the node spins, ask the loop to end after."""
+    """The stop signals' handler: end the process before the node spins, ask the loop after."""
 
     def __init__(self):
         self.spinning = False
@@ -43,40 +43,26 @@ class _Stopper:
     def __call__(self, signum, frame):
         self.requested = True
         if not self.spinning:
-            raise Stop(signum)
+            _end_process(0)
 
 
-def _drop_swallowed_stops(previous, stopper):
-    """Wrap ``sys.unraisablehook`` so that a :class:`Stop` Python had to drop stays quiet.
-
-    A signal landing inside a C callback (numba's LLVM object cache, while the node's
-    warm-up loads or compiles kernels) raises Stop where Python can only report and drop
-    it; the stop is already recorded in ``requested``, and the node never spins. The
-    compiler objects it interrupted may then fail again in their finalizers (llvmlite's
-    ``ObjectRef.__del__``): once a stop is requested, those are dropped too.
-    """
-    def hook(unraisable):
-        """Pass on everything but a dropped Stop and what it left half-built in llvmlite."""
-        if isinstance(unraisable.exc_value, Stop):
-            return
-        where = getattr(unraisable.object, '__module__', None) or ''
-        if stopper.requested and where.startswith('llvmlite'):
-            return
-        previous(unraisable)
-    return hook
+def _end_process(status):
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
 
 
 def main(args=None):
-    """Run the node until SIGINT or SIGTERM; return 0, or 1 when the start is refused."""
+    """Run the node until SIGINT or SIGTERM; return 0, or 1 when the start is refused.
+
+    A stop signal before the node spins ends the process at once, with status 0.
+    """
     stopper = _Stopper()
-    sys.unraisablehook = _drop_swallowed_stops(sys.unraisablehook, stopper)
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         return _run(stopper)
-    except (Stop, KeyboardInterrupt, ExternalShutdownException):
-        return 0   # a signal while the node was built, before it spun
     finally:
         for number in STOP_SIGNALS:   # a second Ctrl-C must not break the clean-up
             signal.signal(number, signal.SIG_IGN)
@@ -97,7 +83,6 @@ def _run(stopper):
             executor.spin_once(timeout_sec=SIGNAL_LATENCY)
     except ExternalShutdownException:
         pass
-    stopper.spinning = False
     for number in STOP_SIGNALS:
         signal.signal(number, signal.SIG_IGN)
     executor.shutdown(timeout_sec=0)
@@ -115,9 +100,7 @@ def executable():
     """
     status = main()
     atexit._run_exitfuncs()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(status)
+    _end_process(status)
 
 
 if __name__ == '__main__':

@@ -5,10 +5,11 @@
 Twenty node processes at every kind of tick rate (1 kHz, 100 Hz, as fast as possible, one
 tick per 1000 s) and paused, each signalled once at a different moment after it reported
 that it simulates (so mostly mid-tick at the fast rates): each must exit with status 0 and
-print no traceback and no rclpy error. The processes are forked from one that imported the
-package once (``node_forks.py``), each then running the executable's ``main`` as the console
-script does. How long each exit took after its signal is printed (``pytest -s``), not
-asserted: no timed tests.
+print no traceback and no rclpy error, and so must a node signalled while it compiles its
+kernels. The twenty processes are forked from one that imported the package once
+(``node_forks.py``), each then running the executable's ``main`` as the console script
+does. How long each exit took after its signal is printed (``pytest -s``), not asserted: no
+timed tests.
 """
 import json
 import os
@@ -18,7 +19,10 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 FORKS = Path(__file__).with_name('node_forks.py')
+EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 START_TIMEOUT = 60.0   # s: twenty nodes discovering each other on a busy machine
 EXIT_TIMEOUT = 30.0    # s: a liveness bound, far above the exit times the benchmark shows
 RATES = (['-p', 'rate:=1000.0'], ['-p', 'rate:=100.0'], ['-p', 'rate:=0.0'],
@@ -57,3 +61,25 @@ def test_twenty_signals_each_end_a_node_with_status_zero_and_no_traceback(tmp_pa
         what = f'{signal.Signals(number).name} {delay} s after start at {rate}'
         assert status == 0, f'{what}: exit status {status}\n{output}'
         assert not [mark for mark in MARKS if mark in output], f'{what}:\n{output}'
+
+
+@pytest.mark.parametrize('number', SIGNALS)
+def test_a_signal_while_the_kernels_compile_ends_the_node_with_status_zero(tmp_path, number):
+    """A node with an empty kernel cache, signalled as it says it compiles, just ends."""
+    environment = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / 'cache'))
+    node = subprocess.Popen([str(EXECUTABLE), '--ros-args', '-r',
+                             f'__ns:=/shutdown{os.getpid()}/compiling'],
+                            env=environment, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        while not (lines and 'compiling' in lines[-1]):
+            lines.append(node.stdout.readline())
+            assert lines[-1], f'ended before compiling:\n{"".join(lines)}'
+        node.send_signal(number)
+        output = ''.join(lines) + node.communicate(timeout=EXIT_TIMEOUT)[0]
+    finally:
+        if node.poll() is None:
+            node.kill()
+    assert node.returncode == 0, output
+    assert not [mark for mark in MARKS if mark in output], output
