@@ -13,7 +13,6 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
 from nav_msgs.msg import Odometry
-from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -66,11 +65,6 @@ def pose_arrays(pose):
 def vector_array(vector):
     """Return a geometry_msgs/Vector3 as a (3,) array."""
     return np.array((vector.x, vector.y, vector.z))
-
-
-def clock(seconds):
-    """Return a rosgraph_msgs/Clock at simulated ``seconds``."""
-    return Clock(clock=to_time(seconds))
 
 
 class StateMessages:

@@ -13,9 +13,9 @@ import time
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock as ClockMessage
 
-from rigid_sim import conversions, parameters
+from rigid_sim import parameters
+from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
@@ -24,7 +24,7 @@ from rigid_sim.diagnostics_output import DiagnosticsOutput
 from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, StateOutputs
-from rigid_sim.qos_overrides import QUEUE_DEPTH, QosOverrides
+from rigid_sim.qos_overrides import QosOverrides
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
 
@@ -109,8 +109,7 @@ class RigidSimNode(Node):
         self.ticks = 0
         self._pending = None       # validated parameter change awaiting the post-set callback
         self.qos_overrides = QosOverrides(self)
-        self._clock_publisher = self.qos_overrides.create_publisher(ClockMessage, '/clock',
-                                                                    QUEUE_DEPTH)
+        self.clock = ClockOutput(self.qos_overrides)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
                                     self.settings.frame_prefix,
                                     self.settings.per_body_topics_limit)
@@ -179,7 +178,7 @@ class RigidSimNode(Node):
     def step(self):
         """Advance ``step_ticks`` ticks whether paused or not, publishing each; their count."""
         ticks = self.settings.step_ticks
-        self.outputs.refresh_listeners()
+        self.refresh_listeners()
         for _ in range(ticks):
             self._tick(advance=True)
         return ticks
@@ -191,7 +190,7 @@ class RigidSimNode(Node):
             self._advance()
         self.health.stats.add(time.perf_counter() - started)
         if self.settings.publish_clock:
-            self._clock_publisher.publish(conversions.clock(self.world.time))
+            self.clock.publish(self.world.time)
         self.imu_outputs.publish(self.world)
         if self.ticks % self.settings.publish_every == 0:
             self.outputs.publish(self.world)
@@ -212,6 +211,11 @@ class RigidSimNode(Node):
                     f'{self.world.diagnostics.last_failure}',
                     throttle_duration_sec=WARNING_PERIOD)
                 return
+
+    def refresh_listeners(self):
+        """Ask who listens to /clock and the state outputs at their next publication."""
+        self.clock.refresh_listeners()
+        self.outputs.refresh_listeners()
 
     def publish_state(self):
         """Publish every state output that has subscribers (pose, twist, odometry, ...)."""

@@ -390,6 +390,46 @@ def test_output_gaining_a_subscriber_is_published_within_the_refresh_period(
     executor.shutdown()
 
 
+def test_clock_goes_out_only_while_someone_listens(ros_context, write_scene):
+    """No /clock message is sent with no subscriber; one joining later gets every tick's time.
+
+    Within LISTENER_REFRESH of wall time (plus spinning) it receives the simulated time of
+    each tick from then on: a whole number of time steps, one step apart.
+    """
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+    from rosgraph_msgs.msg import Clock
+
+    from rigid_sim.node import LISTENER_REFRESH, RigidSimNode
+    from ros_harness import spin_until
+    sim = RigidSimNode(context=ros_context, parameter_overrides=[
+        Parameter('scene', value=write_scene(SCENE)), Parameter('time_step', value=STEP)])
+    sim.loop.stop()
+    publisher = next(p for p in sim.publishers if p.topic_name == '/clock')
+    sent, send = [], publisher.publish
+    publisher.publish = lambda message: sent.append(message) or send(message)
+    sim.tick()
+    sim.tick()
+    assert not sent
+    late = Node('late', context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    for node in (sim, late):
+        executor.add_node(node)
+    received = []
+    late.create_subscription(Clock, '/clock', received.append, 100)
+    joined = time.monotonic()
+    spin_until(executor, lambda: sim.tick() or len(received) >= 3, what='late /clock served')
+    assert time.monotonic() - joined < LISTENER_REFRESH + 0.5
+    ticks = [conversions.to_seconds(m.clock) / STEP for m in received]
+    np.testing.assert_allclose(ticks, np.round(ticks), atol=1e-9)
+    np.testing.assert_allclose(np.diff(ticks), 1.0, atol=1e-9)
+    assert ticks[0] > 2.0
+    for node in (sim, late):
+        node.destroy_node()
+    executor.shutdown()
+
+
 def test_a_large_scene_makes_per_body_topics_when_they_are_used(harness, write_scene):
     """Above per_body_topics_limit bodies, no per-body topic exists until someone uses it.
 

@@ -146,7 +146,7 @@ class Simulation:
                 if publisher.topic_name in inputs:
                     self._wait(lambda: sim.inputs.subscribe_on_demand()
                                or publisher.get_subscription_count() >= 1, publisher.topic_name)
-        sim.outputs.refresh_listeners()
+        sim.refresh_listeners()
 
     def _wait(self, condition, topic):
         deadline = time.monotonic() + CONNECT_TIMEOUT
