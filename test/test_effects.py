@@ -13,7 +13,7 @@ import physics_cases as cases
 from physics_cases import TILT
 import rigid_sim.core.effects
 from rigid_sim.core.inputs import AppliedWrenches, WrenchInputs
-from rigid_sim.core.effects.base import Effect
+from rigid_sim.core.effects.base import Effect, acts_per_body
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity, GravityParameters
 from rigid_sim.core.effects.springs import SpringSpec, Springs
@@ -141,6 +141,55 @@ def test_spring_between_bodies_conserves_momenta(damping, rest_length):
         assert world.energy() < energy0 * 0.99
     else:
         assert abs(world.energy() - energy0) < allowed * energy0
+
+
+def anchored_springs():
+    """Three tumbling bodies: two springs to the world on the first, none on the second."""
+    bodies = cases.make_bodies([1.5, 0.8, 2.0], [INERTIA, np.diag([0.03, 0.02, 0.04]), INERTIA],
+                               [COM, [0.0, 0.05, -0.1], -COM])
+    specs = [SpringSpec(body=2, point=np.array([0.1, 0.0, 0.3]), stiffness=25.0,
+                        anchor=np.array([0.5, 0.5, 2.0])),
+             SpringSpec(body=0, point=np.array([0.2, 0.1, -0.1]), stiffness=40.0, damping=0.6,
+                        rest_length=0.3, anchor=np.array([0.0, 0.0, 2.0])),
+             SpringSpec(body=0, point=np.array([-0.1, 0.0, 0.15]), stiffness=15.0,
+                        damping=0.2, anchor=np.array([1.0, -1.0, 0.5]))]
+    world = cases.make_world(bodies, [[0.0, 0.0, 0.0], [0.6, -0.2, 0.3], [-0.5, 0.4, 0.1]],
+                             [TILT.as_quat(), TILT.inv().as_quat(), [0.0, 0.0, 0.0, 1.0]],
+                             [[0.3, -0.2, 0.1], [-0.4, 0.5, 0.2], [0.1, 0.1, -0.3]],
+                             [OMEGA, [-1.0, 2.0, 0.5], [0.5, -0.5, 2.0]],
+                             [Springs(bodies, specs)])
+    return world, specs
+
+
+def test_springs_to_the_world_pull_by_hookes_law_one_body_at_a_time():
+    """Springs that all end in the world act on one body each, so they run a body at a time.
+
+    Each pulls its point ``p`` towards its anchor ``a`` with ``-(k (l - l0) + c dl/dt) u``,
+    ``u = (p - a) / l``, at the point's velocity ``v + omega x (p - x)``, and turns its body by
+    ``(p - x) x f``; two springs on one body add, and a body without one feels nothing.
+    """
+    world, specs = anchored_springs()
+    assert acts_per_body(world.effect_parameters())
+    snapshot = world.snapshot()
+    force, torque = np.zeros((3, 3)), np.zeros((3, 3))
+    for spec in specs:
+        point = snapshot.point_world(np.array([spec.body]), spec.point[None])
+        velocity = snapshot.point_velocity(np.array([spec.body]), point)[0]
+        point = point[0]
+        length = np.linalg.norm(point - spec.anchor)
+        unit = (point - spec.anchor) / length
+        if spec.rest_length:
+            pull = -(spec.stiffness * (length - spec.rest_length)
+                     + spec.damping * velocity @ unit) * unit
+        else:
+            pull = -spec.stiffness * (point - spec.anchor) - spec.damping * velocity
+        force[spec.body] += pull
+        torque[spec.body] += np.cross(point - world.y[spec.body, POSITION], pull)
+    got_force, got_torque = world.wrench(snapshot)
+    np.testing.assert_allclose(got_force, force, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(got_torque, torque, rtol=1e-13, atol=1e-13)
+    assert not got_force[1].any() and not got_torque[1].any()
+    assert not acts_per_body(two_bodies_on_a_spring(0.0, 0.0).effect_parameters())
 
 
 def pushed(max_force=10.0, max_torque=5.0, accepts=None, integrator='rk4'):

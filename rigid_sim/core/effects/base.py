@@ -11,8 +11,8 @@ it with :func:`body_kernel_for`::
 
 returning body ``i``'s world-axes force and torque about its centre of mass (3-tuples) at its
 position ``x``, quaternion ``q``, momentum ``p`` and world-axes angular momentum ``big_l``
-(tuples) and ``time`` (s). An effect that couples bodies (springs) registers with
-:func:`kernel_for`::
+(tuples) and ``time`` (s). An effect that couples bodies (springs between two bodies)
+registers with :func:`kernel_for`::
 
     kernel(parameters, y, time, model, force, torque)
 

@@ -6,6 +6,9 @@ Each spring pulls its two attachment points together with
 ``f = -(k (l - l0) + c dl/dt) u`` along the unit vector ``u`` from the second end to the
 first; the torque on a body is ``(p - x) x f``. With ``l0 = 0`` the force is the full vector
 ``-k d - c d'`` and stays defined when the points meet.
+
+Springs that all end in the world act on one body each: they then get a kernel of one body,
+so that the integrators may take each body through a whole step in registers.
 """
 import math
 from dataclasses import dataclass
@@ -15,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from rigid_sim.core import kinematics as kin
-from rigid_sim.core.effects.base import Effect, kernel_for
+from rigid_sim.core.effects.base import Effect, body_kernel_for, kernel_for
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,19 @@ class SpringParameters(NamedTuple):
     anchor: np.ndarray       # (S, 3) m, world anchor (unused for a second body)
 
 
+class AnchoredSpringParameters(NamedTuple):
+    """S springs that each end in the world, grouped by body, as the kernel of one body reads.
+
+    Two arrays only: every array a compiled kernel takes out of its parameters is a
+    reference count it keeps across its loop over the body's springs.
+    """
+
+    first: np.ndarray   # (N + 1,) int: body i's springs are rows first[i] to first[i + 1] - 1
+    # (S, 9): lever (m, body axes, from the centre of mass), anchor (m, world), stiffness
+    # N/m, damping N s/m, rest length m; each body's springs in the scene's order.
+    rows: np.ndarray
+
+
 class Springs(Effect):
     """All springs of a scene, evaluated together."""
 
@@ -65,6 +81,8 @@ class Springs(Effect):
                                           other_point - com[np.maximum(other, 0)], 0.0)),
             np.array([np.zeros(3) if s.anchor is None or s.other is not None else s.anchor
                       for s in specs], dtype=float).reshape(-1, 3))
+        self._kernel_parameters = (self._parameters if np.any(other >= 0)
+                                   else self._by_body(bodies.count))
         self.velocity_dependent = bool(np.any(self._parameters.damping != 0.0))
         self._inverse_mass = self._inverse_effective_mass(bodies)
         self.torqued[body] = True
@@ -72,8 +90,19 @@ class Springs(Effect):
 
     @property
     def parameters(self):
-        """Return the :class:`SpringParameters` the compiled kernel reads."""
-        return self._parameters
+        """Return the parameters the compiled kernel reads.
+
+        :class:`AnchoredSpringParameters` when every spring ends in the world, else
+        :class:`SpringParameters`.
+        """
+        return self._kernel_parameters
+
+    def _by_body(self, count):
+        p = self._parameters
+        order = np.argsort(p.body, kind='stable')
+        rows = np.column_stack((p.lever, p.anchor, p.stiffness, p.damping, p.rest))[order]
+        return AnchoredSpringParameters(np.searchsorted(p.body[order], np.arange(count + 1)),
+                                        np.ascontiguousarray(rows))
 
     def _inverse_effective_mass(self, bodies):
         """(S,) 1/kg: an upper bound on how fast each spring's ends accelerate per newton.
@@ -142,13 +171,16 @@ def _end(y, model, body, lever, s):
     return position, velocity, arm
 
 
-@njit(cache=True)
-def _tension(p, s, first, second, first_velocity, second_velocity):
-    """Force on the first end of spring ``s``: Hooke's law plus the damper, 3-tuple, N."""
+# Inlined: a call inside a loop keeps the caller's array references alive across it.
+@njit(cache=True, inline='always')
+def _tension(k, c, rest, first, second, first_velocity, second_velocity):
+    """Force on the first end of a spring ``k``, damper ``c``: Hooke's law plus the damper.
+
+    3-tuple, N; scalars and tuples only, so a call passes no arrays.
+    """
     d = (first[0] - second[0], first[1] - second[1], first[2] - second[2])
     dv = (first_velocity[0] - second_velocity[0], first_velocity[1] - second_velocity[1],
           first_velocity[2] - second_velocity[2])
-    k, c, rest = p.stiffness[s], p.damping[s], p.rest[s]
     if rest > 0.0:
         length = math.sqrt(kin.dot(d, d))
         # A scene refuses both ends at one point; a pass through it reads as no direction.
@@ -180,10 +212,37 @@ def spring_wrench(p, y, time, model, force, torque):
         else:
             second, second_velocity = kin.vector(p.anchor, s, 0), (0.0, 0.0, 0.0)
             other_arm = second_velocity
-        f = _tension(p, s, first, second, first_velocity, second_velocity)
+        f = _tension(p.stiffness[s], p.damping[s], p.rest[s], first, second, first_velocity,
+                     second_velocity)
         _add(force, torque, p.body[s], f, arm)
         if other >= 0:
             _add(force, torque, other, (-f[0], -f[1], -f[2]), other_arm)
+
+
+@body_kernel_for(AnchoredSpringParameters)
+@njit(cache=True, inline='always')
+def anchored_spring_wrench(p, i, x, q, momentum, big_l, time, model):
+    """Force and torque (3-tuples) of the springs holding body ``i`` to the world.
+
+    The same arithmetic as :func:`spring_wrench`, body ``i``'s springs in the scene's order.
+    """
+    force = torque = (0.0, 0.0, 0.0)
+    start, end = p.first[i], p.first[i + 1]
+    if start == end:
+        return force, torque
+    rows = p.rows
+    r = kin.matrix(q)
+    omega = kin.angular_velocity(r, kin.entries(model.inertia_inv, i), big_l)
+    inverse_mass = model.inverse_mass[i]
+    for s in range(start, end):
+        arm = kin.rotate(r, kin.vector(rows, s, 0))
+        spin = kin.cross(omega, arm)
+        velocity = (momentum[0] * inverse_mass + spin[0], momentum[1] * inverse_mass + spin[1],
+                    momentum[2] * inverse_mass + spin[2])
+        f = _tension(rows[s, 6], rows[s, 7], rows[s, 8], kin.add(x, arm),
+                     kin.vector(rows, s, 3), velocity, (0.0, 0.0, 0.0))
+        force, torque = kin.add(force, f), kin.add(torque, kin.cross(arm, f))
+    return force, torque
 
 
 @njit(cache=True)
