@@ -1,6 +1,8 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""``rigid_sim_bench node`` runs end to end on its quick configuration (N = 1 and 10).
+"""``rigid_sim_bench node`` runs end to end on its quick configuration.
+
+N = 1 and 10 boxes, and the default scene with /clock listened to.
 
 conftest.py gives this run its own ROS_DOMAIN_ID, LOCALHOST discovery and a log directory;
 the benchmark keeps the same settings for its node and its listener process.
@@ -11,7 +13,8 @@ import numpy as np
 import yaml
 
 from rigid_sim.bench import cli
-from rigid_sim.bench.node_rate import QUICK, SECTION, Config, goals, scene_text
+from rigid_sim.bench.node_rate import (DEFAULT_SCENE, QUICK, SECTION, Config, goals,
+                                       scene_text)
 from rigid_sim.core.scene import parse_scene
 from rigid_sim.tick_loop import MAX_LAG
 
@@ -89,3 +92,22 @@ def test_only_one_millisecond_steps_count_towards_the_1_khz_goals():
     lines = goals([split, coarse])
     assert len(lines) == 1 and lines[0].startswith('- 1000 bodies')
     assert 'met by rk4 at 50 Hz x 20 substeps' in lines[0] and 'exact_split' not in lines[0]
+
+
+def test_the_default_scene_goals_read_its_share_of_a_core_and_its_rate():
+    """At rate 100 nobody listening: under 5 % of a core with ticks (p99) under 0.5 ms.
+
+    At rate 1000 the real-time factor decides; a row with a listener is no goal's row.
+    """
+    def row(rate, listened, core_share, tick_p99, real_time_factor=1.0):
+        return dict(config=Config(2, rate, 1.0 / rate, 1, rate, listened, DEFAULT_SCENE),
+                    integrator='exact_split', core_share=core_share, tick_p99=tick_p99,
+                    real_time_factor=real_time_factor)
+    lines = goals([row(100.0, 'nothing', 0.049, 4e-4), row(100.0, 'clock', 0.09, 9e-4),
+                   row(1000.0, 'nothing', 0.15, 2e-4, 0.995)])
+    assert len(lines) == 2
+    assert 'at 100 Hz' in lines[0] and ': met by exact_split (4.90 %' in lines[0]
+    assert 'at 1000 Hz: met' in lines[1]
+    assert 'NOT met' in goals([row(100.0, 'nothing', 0.051, 4e-4)])[0]
+    assert 'NOT met' in goals([row(100.0, 'nothing', 0.04, 6e-4)])[0]
+    assert 'NOT met' in goals([row(1000.0, 'nothing', 0.2, 2e-4, 0.98)])[0]

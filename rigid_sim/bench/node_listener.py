@@ -3,8 +3,8 @@
 """The listener process of ``rigid_sim_bench node``: counts the messages on given topics.
 
 ``python -m rigid_sim.bench.node_listener TOPIC...``; a topic's last name (``pose``,
-``twist``, ``odom``, ``poses``) names its type. Every line read on stdin is answered with one
-JSON line on stdout, ``{topic: messages received so far}``. SIGINT ends it.
+``twist``, ``odom``, ``poses``, ``clock``) names its type. Every line read on stdin is
+answered with one JSON line on stdout, ``{topic: messages received so far}``. SIGINT ends it.
 
 It runs in its own process so that the node under test, which only fills and sends outputs
 that have subscribers, pays for publishing as it would to a real user, and so that receiving
@@ -23,8 +23,10 @@ from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
+from rosgraph_msgs.msg import Clock
 
-TYPES = {'pose': PoseStamped, 'twist': TwistStamped, 'odom': Odometry, 'poses': PoseArray}
+TYPES = {'pose': PoseStamped, 'twist': TwistStamped, 'odom': Odometry, 'poses': PoseArray,
+         'clock': Clock}
 QUEUE_DEPTH = 10   # the node's; a listener that fell behind would lose messages, not queue
 
 

@@ -4,7 +4,8 @@
 
 The node (:class:`rigid_sim.node.RigidSimNode`, every tick timed) spins in the
 executor ``rigid_sim_node`` runs (:mod:`rigid_sim.executor`), on a scene of N boxes under gravity,
-each with its own spin. A listener in another process (:mod:`.node_listener`) subscribes to
+each with its own spin, and on the packaged default scene, whose share of a core it costs
+is a goal of its own. A listener in another process (:mod:`.node_listener`) subscribes to
 exactly the topics a configuration claims to publish and counts what arrives: the node only
 fills and sends outputs that have subscribers, so without it publishing would cost nothing.
 Timing starts once every claimed topic is matched and after a warm-up.
@@ -31,6 +32,7 @@ from rigid_sim import bench
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.executor import make_executor
 from rigid_sim.node import RigidSimNode
+from rigid_sim.resources import find_scene
 
 SECTION = 'rigid_sim_bench node'
 WRENCH_INPUT_LIMIT = 100   # from this N on, no wrench subscriptions (see the module text)
@@ -40,10 +42,16 @@ GOAL_RTF = 0.99            # a 1 kHz wall-clock timer cannot average above 1; se
 DURATION, WARMUP = 5.0, 1.0   # s of wall time
 
 
-# N bodies, rate [Hz], time_step [s], substeps, publish_rate [Hz], and what the listener
-# takes: 'bodies' (pose and twist of every body) or 'poses' (the PoseArray only).
-Config = namedtuple('Config', 'bodies rate time_step substeps publish_rate listened')
-CONFIGS = (Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
+# N bodies, rate [Hz], time_step [s], substeps, publish_rate [Hz], what the listener
+# takes ('bodies': pose and twist of every body, 'poses': the PoseArray, 'clock': /clock,
+# 'nothing') and the scene ('boxes' of N bodies, or 'default.yaml', the packaged one).
+Config = namedtuple('Config', 'bodies rate time_step substeps publish_rate listened scene',
+                    defaults=('boxes',))
+DEFAULT_SCENE = 'default.yaml'
+CONFIGS = (Config(2, 100.0, 1e-2, 1, 100.0, 'nothing', DEFAULT_SCENE),
+           Config(2, 100.0, 1e-2, 1, 100.0, 'clock', DEFAULT_SCENE),
+           Config(2, 1000.0, 1e-3, 1, 1000.0, 'nothing', DEFAULT_SCENE),
+           Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            Config(100, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            Config(100, 100.0, 1e-2, 10, 100.0, 'bodies'),
            Config(1000, 1000.0, 1e-3, 1, 50.0, 'poses'),
@@ -52,7 +60,8 @@ CONFIGS = (Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
            # so no goal counts it; exact_split moves these torque-free boxes exactly anyway.
            Config(1000, 50.0, 2e-2, 1, 50.0, 'poses'))
 QUICK = dict(configs=(Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
-                      Config(10, 100.0, 1e-2, 10, 100.0, 'poses')),
+                      Config(10, 100.0, 1e-2, 10, 100.0, 'poses'),
+                      Config(2, 100.0, 1e-2, 1, 100.0, 'clock', DEFAULT_SCENE)),
              duration=0.5, warmup=0.3, start_sizes=(10,))
 # Scenes (N bodies, every one taking wrenches) the executable is started and stopped on.
 START_SIZES = (1000, 10_000)
@@ -61,6 +70,9 @@ START_TIMEOUT = 120.0   # s
 GOAL_PHYSICS_STEP = 1e-3   # s
 GOALS = ((100, 'bodies', '100 bodies, per-body pose and twist at 100 Hz, 1 kHz physics'),
          (1000, 'poses', '1000 bodies, PoseArray at 50 Hz, 1 kHz physics'))
+# The default scene, nobody listening: at rate 100 under this share of a core with ticks
+# (p99) under this many seconds; at rate 1000 the real-time goal above.
+GOAL_CORE_SHARE, GOAL_TICK_P99 = 0.05, 5e-4
 
 
 class TimedNode(RigidSimNode):
@@ -96,6 +108,8 @@ def scene_text(n, wrench_input=None):
 def claimed_topics(node, config):
     """Absolute names of the topics ``config`` listens to."""
     prefix = node.get_fully_qualified_name()
+    if config.listened in ('clock', 'nothing'):
+        return ['/clock'] if config.listened == 'clock' else []
     if config.listened == 'poses':
         return [f'{prefix}/poses']
     return [f'{prefix}/{body.name}/{kind}' for body in node.scene.bodies
@@ -190,7 +204,9 @@ def measure(config, integrator, context, scene, log_dir, seconds):
         before = listener.counts()
         node.tick_seconds.clear()
         sim_start, wall_start = node.world.time, time.perf_counter()
+        cpu_start = time.process_time()   # every thread of the process: the middleware's too
         spin_for(executor, seconds[1])
+        cpu = time.process_time() - cpu_start
         wall = time.perf_counter() - wall_start
         simulated, ticks = node.world.time - sim_start, np.array(node.tick_seconds)
         after = listener.counts()
@@ -201,7 +217,8 @@ def measure(config, integrator, context, scene, log_dir, seconds):
         executor.shutdown()
     received = np.array([after[topic] - before[topic] for topic in topics])
     return dict(config=config, integrator=integrator, real_time_factor=simulated / wall,
-                tick_mean=ticks.mean(), tick_p99=np.percentile(ticks, 99),
+                tick_mean=ticks.mean(), tick_p50=np.percentile(ticks, 50),
+                tick_p99=np.percentile(ticks, 99), core_share=cpu / wall,
                 busy=ticks.sum() / wall, ticks=len(ticks), expected_ticks=config.rate * wall,
                 received_rate=received.sum() / wall,
                 expected_rate=config.publish_rate * len(topics),
@@ -246,15 +263,18 @@ def start_table(starts):
 
 def table(results):
     """Markdown: a row per configuration and integrator."""
-    header = ['N', 'integrator', 'rate [Hz] x substeps', 'time_step [s]', 'listened',
-              'real-time factor', 'tick mean [ms]', 'tick p99 [ms]', 'busy',
-              'ticks / expected', 'received / expected [msg/s]', 'topics heard',
-              'waitables']
-    listened = {'bodies': 'pose + twist of each body', 'poses': '~/poses'}
-    rows = [[r['config'].bodies, r['integrator'],
+    header = ['N', 'scene', 'integrator', 'rate [Hz] x substeps', 'time_step [s]', 'listened',
+              'real-time factor', 'CPU [% of a core]', 'tick mean [ms]', 'tick p50 [ms]',
+              'tick p99 [ms]', 'busy', 'ticks / expected', 'received / expected [msg/s]',
+              'topics heard', 'waitables']
+    listened = {'bodies': 'pose + twist of each body', 'poses': '~/poses', 'clock': '/clock',
+                'nothing': 'nothing'}
+    rows = [[r['config'].bodies, r['config'].scene, r['integrator'],
              f'{r["config"].rate:g} x {r["config"].substeps}', f'{r["config"].time_step:g}',
-             f'{listened[r["config"].listened]} at {r["config"].publish_rate:g} Hz',
-             f'{r["real_time_factor"]:.3f}', f'{1e3 * r["tick_mean"]:.3g}',
+             listened[r['config'].listened]
+             + (f' at {r["config"].publish_rate:g} Hz' if r['topics'] else ''),
+             f'{r["real_time_factor"]:.3f}', f'{100 * r["core_share"]:.2f}',
+             f'{1e3 * r["tick_mean"]:.3g}', f'{1e3 * r["tick_p50"]:.3g}',
              f'{1e3 * r["tick_p99"]:.3g}', f'{100 * r["busy"]:.0f} %',
              f'{r["ticks"]} / {r["expected_ticks"]:.0f}',
              f'{r["received_rate"]:.0f} / {r["expected_rate"]:.0f}',
@@ -282,6 +302,26 @@ def goals(results):
                     f'{1e3 * r["tick_mean"]:.2f} ms, {r["received_rate"]:.0f} of '
                     f'{r["expected_rate"]:.0f} msg/s received)' for r in runs]
         lines.append(f'- {wording}: ' + '; '.join(verdicts) + '.')
+    return lines + default_scene_goals(results)
+
+
+def default_scene_goals(results):
+    """Markdown lines: the default scene's share of a core at rate 100, its rate at 1000."""
+    lines = []
+    for r in results:
+        config = r['config']
+        if (config.scene, config.listened) != (DEFAULT_SCENE, 'nothing'):
+            continue
+        if config.rate == 100.0:
+            met = r['core_share'] < GOAL_CORE_SHARE and r['tick_p99'] < GOAL_TICK_P99
+            lines.append(f'- The default scene at 100 Hz under {100 * GOAL_CORE_SHARE:g} % of '
+                         f'a core, tick p99 under {1e3 * GOAL_TICK_P99:g} ms: '
+                         f'{"met" if met else "NOT met"} by {r["integrator"]} '
+                         f'({100 * r["core_share"]:.2f} %, p99 {1e3 * r["tick_p99"]:.2f} ms).')
+        elif config.rate == 1000.0:
+            met = r['real_time_factor'] >= GOAL_RTF
+            lines.append(f'- The default scene at 1000 Hz: {"met" if met else "NOT met"} by '
+                         f'{r["integrator"]} (real-time factor {r["real_time_factor"]:.3f}).')
     return lines
 
 
@@ -295,11 +335,14 @@ def report(results, seconds, starts=()):
         f'listener matched and {seconds[0]:g} s of warm-up.',
         '- Scene: N boxes (1 kg, 0.2 x 0.1 x 0.05 m) in a grid under gravity, each with its '
         f'own spin; from N = {WRENCH_INPUT_LIMIT} on `wrench_input: false`, so the executor '
-        'does not wait on N wrench subscriptions (~625 callbacks/s with 100 of them).',
+        'does not wait on N wrench subscriptions (~625 callbacks/s with 100 of them); or the '
+        f'packaged `{DEFAULT_SCENE}` (2 bodies, gravity, damping, two springs).',
+        '- CPU: `time.process_time` of the whole process (the middleware\'s threads too) over '
+        'the timed wall time.',
         '- The node runs in one EventsExecutor, in one thread, as `rigid_sim_node` '
-        'does; `/clock` goes out every tick (default). A listener process (the second core) '
-        'subscribes to exactly the topics in "listened" and counts what arrives; the node '
-        'fills and sends only outputs with subscribers.',
+        'does; `/clock` goes out every tick it has a subscriber (default). A listener process '
+        '(the second core) subscribes to exactly the topics in "listened" and counts what '
+        'arrives; the node fills and sends only outputs with subscribers.',
         '- Tick: applying inputs, integrating and publishing (`time.perf_counter` around '
         '`tick()`). Busy: the share of wall time spent in ticks. Real-time factor: simulated '
         'time advanced over wall time; the tick loop catches late ticks up and gives up '
@@ -346,7 +389,10 @@ def main(args):
         try:
             for config in chosen['configs']:
                 scene = Path(log_dir, f'boxes_{config.bodies}.yaml')
-                scene.write_text(scene_text(config.bodies))
+                if config.scene == DEFAULT_SCENE:
+                    scene = find_scene(DEFAULT_SCENE)
+                else:
+                    scene.write_text(scene_text(config.bodies))
                 for integrator in args.integrators:
                     results.append(measure(config, integrator, context, str(scene), log_dir,
                                            seconds))
