@@ -100,8 +100,8 @@ def test_impulse_turns_the_body_by_pi_in_one_step():
 def test_stiff_spring_substeps_follow_the_energy_bound():
     """k/m = 1e6 at dt = 1e-3 is w dt = 1.
 
-    The default splits each step into ceil(w dt / STRANG_BOUND) substeps, and the mass follows x0
-    cos(w t) closely.
+    The default splits each step into ceil(w dt / STRANG_BOUND) substeps, says so with those
+    numbers, and the mass follows x0 cos(w t) closely. A step of w dt = 100 takes the cap.
     """
     case = hard.STIFF_SPRING
     world = case.build(DEFAULT_INTEGRATOR, True)
@@ -111,6 +111,12 @@ def test_stiff_spring_substeps_follow_the_energy_bound():
     assert world.diagnostics.substeps == math.ceil(1000.0 * case.dt / STRANG_BOUND)
     expected = x0 * np.cos(1000.0 * world.time)
     assert np.linalg.norm(world.y[0, POSITION] - expected) < 1e-2 * x0[0]
+    assert world.diagnostics.reason.startswith(
+        f'accuracy: spring/damper rate dt 1 + spin |omega| dt 0 is {1.0 / STRANG_BOUND:.3g} '
+        f'{DEFAULT_INTEGRATOR} bounds')
+    world.step(100 * case.dt)   # w dt = 100: more substeps than a tick may take
+    assert world.diagnostics.substeps == safeguards.MAX_SUBSTEPS
+    assert world.diagnostics.reason.endswith(f'; capped at {safeguards.MAX_SUBSTEPS} substeps')
 
 
 def test_far_mesh_inertia_is_exact_only_when_recentred():

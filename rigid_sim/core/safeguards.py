@@ -18,6 +18,7 @@ The bounds are numbers of this module; the integrators name theirs from here.
 """
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -79,10 +80,43 @@ class StepDiagnostics:
     """What the safeguards did; the node publishes it on /diagnostics."""
 
     substeps: int = 1         # equal substeps the last step took
-    reason: str = ''          # why the last step was split ('' when it was not)
+    why: object = ''          # SplitReason of the last step ('' when it was not split)
     rejected_steps: int = 0   # attempts thrown away for a non-finite value, since reset
     failed_steps: int = 0     # steps given up, the state kept as it was, since reset
     last_failure: str = ''    # what the last rejected attempt or given-up step met
+
+    @property
+    def reason(self):
+        """Why the last step was split, in words ('' when it was not)."""
+        return str(self.why)
+
+
+class SplitReason(NamedTuple):
+    """Why a step was split: the numbers, put into words only when read (``str``).
+
+    A step makes one and its reader (the node's diagnostics, once a second) is rarer:
+    formatting every step's cost its node tick more than the check that found it.
+    """
+
+    kind: str              # what the bound protects (StepBound.kind)
+    oscillation: float     # spring/damper rate times dt
+    spin: float            # largest |omega| times dt, of the bodies the bound covers
+    need: float            # fractions of the method's bounds, added
+    method: str            # the integrator's name
+    substeps: int          # the count taken
+    capped: bool           # the need was above MAX_SUBSTEPS
+    reached: bool = False  # the need was found only at the end of the step
+
+    def __str__(self):
+        words = (f'{self.kind}: spring/damper rate dt {self.oscillation:.3g} '
+                 f'+ spin |omega| dt {self.spin:.3g} is {self.need:.3g} {self.method} bounds')
+        if self.need <= self.substeps - 1 and not self.capped:
+            words = f'{words}; {self.substeps} kept from the last step'
+        if self.capped:
+            words = f'{words}; capped at {MAX_SUBSTEPS} substeps'
+        if self.reached:
+            words = f'{words} (reached during the step)'
+        return words
 
 
 def check_time_step(dt):
@@ -126,7 +160,7 @@ class StepGuard:
         self._largest_spin = CompiledCall(kinematics.largest_spin)
 
     def plan(self, integrator, y, dt, current=1):
-        """Substeps (int) and the reason ('' for one) for a step of ``dt`` from ``y``.
+        """Substeps (int) and why (:class:`SplitReason`, '' for one) for a step of ``dt``.
 
         A spring's torque on a spinning body varies at up to the sum of the two rates, so
         the fractions of the two bounds add. ``current`` is the count of the last step: it
@@ -141,14 +175,10 @@ class StepGuard:
             substeps = min(current, max(1, math.ceil(KEEP_MARGIN * need)))
         if substeps == 1:
             return 1, ''
-        reason = (f'{bound.kind}: spring/damper rate dt {self._rate * dt:.3g} '
-                  f'+ spin |omega| dt {spin * bound.rotation:.3g} is {need:.3g} '
-                  f'{integrator.name} bounds')
-        if need <= substeps - 1:
-            reason = f'{reason}; {substeps} kept from the last step'
-        if substeps > MAX_SUBSTEPS:
-            substeps, reason = MAX_SUBSTEPS, f'{reason}; capped at {MAX_SUBSTEPS} substeps'
-        return substeps, reason
+        capped = substeps > MAX_SUBSTEPS
+        substeps = min(substeps, MAX_SUBSTEPS)
+        return substeps, SplitReason(bound.kind, self._rate * dt, spin * bound.rotation, need,
+                                     integrator.name, substeps, capped)
 
     def spin_rate(self, bound, y):
         """Largest ``|omega|``, rad/s, of the bodies whose rotation ``bound`` covers.

@@ -124,12 +124,12 @@ class World:
             # A wrench may spin a body up within the step: redo it if the end breaks the bound.
             grown, why = self._plan(y, dt, substeps)
             if grown > substeps:
-                substeps, reason = grown, why + ' (reached during the step)'
+                substeps, reason = grown, why._replace(reached=True)
                 y = self._attempt(dt, substeps)
             else:   # the plan a step of dt from y will make, unless y or the inputs change
                 self._next_plan = (y, dt, self.inputs.version, self.integrator, grown, why)
         diagnostics = self.diagnostics
-        diagnostics.substeps, diagnostics.reason = substeps, reason
+        diagnostics.substeps, diagnostics.why = substeps, reason
         if y is None:
             diagnostics.failed_steps += 1
             return False
