@@ -67,3 +67,24 @@ def test_carlson_integrals_match_scipy():
         assert abs(elliprj(x, y, 1.0, p) / reference.elliprj(x, y, 1.0, p) - 1.0) < 1e-14
     assert abs(elliprf(4.0, 4.0, 4.0) - 0.5) < 1e-16
     assert abs(elliprf(0.0, 1.0, 1.0) - np.pi / 2.0) < 4e-16
+
+
+def test_carlson_third_kind_matches_scipy_on_both_branches():
+    """R_J agrees with scipy's where (p - x)(p - y)(p - z) is negative too, and R_J(x, x, x, x).
+
+    The sign of that product chooses between the arctangent and the inverse hyperbolic
+    tangent in each duplication's R_C term; the free flow only reaches the first (p > 1 >= x,
+    y, z), so p below x, y or z is drawn here. R_J(x, x, x, x) = x^-3/2 is DLMF 19.20.15.
+    """
+    from scipy import special as reference
+    from rigid_sim.core.special import elliprj
+    rng = np.random.default_rng(4)
+    negative = 0
+    for _ in range(2000):
+        x, y, z = rng.uniform(0.0, 4.0), 10.0 ** rng.uniform(-20.0, 1.0), rng.uniform(0.5, 3.0)
+        p = 10.0 ** rng.uniform(-3.0, 1.0)
+        negative += (p - x) * (p - y) * (p - z) < 0.0
+        assert abs(elliprj(x, y, z, p) / reference.elliprj(x, y, z, p) - 1.0) < 1e-14
+    assert negative > 200
+    for x in (1e-3, 0.7, 9.0):
+        assert abs(elliprj(x, x, x, x) * x ** 1.5 - 1.0) < 4e-16

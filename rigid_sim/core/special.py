@@ -4,9 +4,10 @@
 
 ``ellipj`` and ``ellipkm1`` are those of ``scipy.special.cython_special``. Carlson's
 symmetric integrals are written out here by his duplication method (B. C. Carlson,
-Numerical Algorithms 10, 1995, as in Numerical Recipes 3rd ed., 6.12): the free flow calls
-three per body and drift, and scipy's cost more for the same double-precision result
-(docs/performance.md has the timings); scipy's stay the reference the tests compare with.
+Numerical Algorithms 10, 1995; the series and tolerances as in Numerical Recipes 3rd ed.,
+6.12): the free flow calls three per body and drift, and scipy's cost more for the same
+double-precision result (docs/performance.md has the timings); scipy's stay the reference
+the tests compare with.
 
 Each C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
@@ -35,7 +36,7 @@ _ellipj = types.ExternalFunction('rigid_sim_ellipj', _EXPORTS['rigid_sim_ellipj'
 _ellipkm1 = types.ExternalFunction('rigid_sim_ellipkm1', _EXPORTS['rigid_sim_ellipkm1'][1])
 # Duplication stops when every argument is within this of their mean: the truncated series
 # then errs ~TOL^6, below double precision (Numerical Recipes' choices for doubles).
-RF_TOL, RJ_TOL, RC_TOL = 0.0025, 0.0015, 0.0012
+RF_TOL, RJ_TOL = 0.0025, 0.0015
 # Each duplication divides the spread of the arguments by ~4, so this many reach RF_TOL from
 # a spread of 1e300; a NaN argument never converges and stops here, still NaN.
 MAX_DUPLICATIONS = 600
@@ -87,49 +88,61 @@ def elliprf(x, y, z):
         lam = sx * (sy + sz) + sy * sz
         x, y, z = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam)
         mean = (x + y + z) / 3.0
-        dx, dy, dz = (mean - x) / mean, (mean - y) / mean, (mean - z) / mean
-        if max(abs(dx), max(abs(dy), abs(dz))) <= RF_TOL:
+        if max(abs(mean - x), max(abs(mean - y), abs(mean - z))) <= RF_TOL * mean:
             break
+    inverse = 1.0 / mean
+    dx, dy, dz = (mean - x) * inverse, (mean - y) * inverse, (mean - z) * inverse
     e2 = dx * dy - dz * dz
     e3 = dx * dy * dz
     return (1.0 + (e2 / 24.0 - 0.1 - 3.0 / 44.0 * e3) * e2 + e3 / 14.0) / math.sqrt(mean)
 
 
+# Below this |e|, R_C(1, 1 + e) is its Maclaurin series to five terms: the sixth is ~e^5 / 11,
+# below double precision. A duplication divides e by ~64, so all but the first one or two
+# terms of R_J's sum take the series rather than an arctangent.
+RC_SERIES = 1e-3
+
+
 @njit(cache=True)
-def _elliprc(x, y):
-    """Carlson's degenerate integral ``R_C(x, y)`` for x >= 0, y > 0."""
-    for _ in range(MAX_DUPLICATIONS):
-        lam = 2.0 * math.sqrt(x) * math.sqrt(y) + y
-        x, y = 0.25 * (x + lam), 0.25 * (y + lam)
-        mean = (x + y + y) / 3.0
-        s = (y - mean) / mean
-        if abs(s) <= RC_TOL:
-            break
-    return (1.0 + s * s * (0.3 + s * (1.0 / 7.0 + s * (0.375 + s * 9.0 / 22.0)))) \
-        / math.sqrt(mean)
+def _elliprc_one(e):
+    """Carlson's ``R_C(1, 1 + e)`` for e > -1: ``atan(sqrt e) / sqrt e`` or its atanh twin."""
+    if abs(e) < RC_SERIES:
+        return 1.0 - e * (1.0 / 3.0 - e * (0.2 - e * (1.0 / 7.0 - e / 9.0)))
+    if e > 0.0:
+        root = math.sqrt(e)
+        return math.atan(root) / root
+    root = math.sqrt(-e)
+    return math.atanh(root) / root
 
 
 @njit(cache=True)
 def elliprj(x, y, z, p):
     """Evaluate Carlson's symmetric integral ``R_J(x, y, z, p)``.
 
-    Defined for x, y, z >= 0 with at most one of them zero, and p > 0.
+    Defined for x, y, z >= 0 with at most one of them zero, and p > 0. Carlson's 1995
+    duplication: the term each step adds is ``R_C(1, 1 + e_m) / d_m``, with
+    ``d_m = (sqrt p + sqrt x)(sqrt p + sqrt y)(sqrt p + sqrt z)`` and
+    ``e_m = 4^(-3m) (p - x)(p - y)(p - z) / d_m^2``, a closed form where the 1979 algorithm
+    ran a duplication of R_C's own inside every step.
     """
     if (x == 0.0) + (y == 0.0) + (z == 0.0) > 1:
         return math.inf
+    delta = (p - x) * (p - y) * (p - z)
     total, factor = 0.0, 1.0
     for _ in range(MAX_DUPLICATIONS):
-        sx, sy, sz = math.sqrt(x), math.sqrt(y), math.sqrt(z)
+        sx, sy, sz, sp = math.sqrt(x), math.sqrt(y), math.sqrt(z), math.sqrt(p)
         lam = sx * (sy + sz) + sy * sz
-        alpha = (p * (sx + sy + sz) + sx * sy * sz) ** 2
-        total += factor * _elliprc(alpha, p * (p + lam) ** 2)
+        d = (sp + sx) * (sp + sy) * (sp + sz)
+        total += factor * _elliprc_one(factor * factor * factor * delta / (d * d)) / d
         factor *= 0.25
         x, y, z, p = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam), 0.25 * (p + lam)
         mean = 0.2 * (x + y + z + p + p)
-        dx, dy = (mean - x) / mean, (mean - y) / mean
-        dz, dp = (mean - z) / mean, (mean - p) / mean
-        if max(max(abs(dx), abs(dy)), max(abs(dz), abs(dp))) <= RJ_TOL:
+        if (max(max(abs(mean - x), abs(mean - y)), max(abs(mean - z), abs(mean - p)))
+                <= RJ_TOL * mean):
             break
+    inverse = 1.0 / mean
+    dx, dy = (mean - x) * inverse, (mean - y) * inverse
+    dz, dp = (mean - z) * inverse, (mean - p) * inverse
     ea = dx * (dy + dz) + dy * dz
     eb = dx * dy * dz
     ec = dp * dp
@@ -138,4 +151,4 @@ def elliprj(x, y, z, p):
     series = (1.0 + ed * (-3.0 / 14.0 + 9.0 / 88.0 * ed - 9.0 / 52.0 * ee)
               + eb * (1.0 / 6.0 + dp * (-3.0 / 11.0 + dp * 3.0 / 26.0))
               + dp * ea * (1.0 / 3.0 - dp * 3.0 / 22.0) - dp * ec / 3.0)
-    return 3.0 * total + factor * series / (mean * math.sqrt(mean))
+    return 6.0 * total + factor * series / (mean * math.sqrt(mean))
