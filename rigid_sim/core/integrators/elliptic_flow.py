@@ -200,23 +200,60 @@ def elliptic_working(i, m, time, ratio, nu):
     big_l = math.sqrt(kin.dot(m, m))
     i1, i3 = i[0], i[2]
     dpsi = big_l * time / i3 + big_l * (i3 - i1) / (i1 * i3 * rate) * (g1 - g0)
-    alpha0 = math.atan2(s0, ratio * c0)
-    alpha1 = turns * math.pi + math.atan2(sn, ratio * cn)
-    core = kin.multiply(_zyz(alpha0, _polar(m), dpsi),
-                        kin.conjugate(_zyz(alpha1, _polar(m_new), 0.0)))
+    # Euler angles enter only halved, so each is kept as (cos, sin) of its half: from the
+    # vectors that define it, with square roots, where angles cost an atan2 and two sines.
+    half_alpha0 = _half_angle(ratio * c0, s0)
+    half_alpha1 = _quarter_turns(_half_angle(ratio * cn, sn), turns)
+    half_dpsi = (math.cos(0.5 * dpsi), math.sin(0.5 * dpsi))
+    core = kin.multiply(_zyz(half_alpha0, _half_polar(m), half_dpsi),
+                        kin.conjugate(_zyz(half_alpha1, _half_polar(m_new), (1.0, 0.0))))
     return m_new, core
 
 
 @njit(cache=True)
-def _polar(m):
-    """Angle between m and the working axis 3, in [0, pi]."""
-    return math.atan2(math.hypot(m[0], m[1]), m[2])
+def _half_angle(c, s):
+    """``(cos, sin)`` of half of ``atan2(s, c)`` (in (-pi, pi]; (1, 0) for c = s = 0).
+
+    Of ``cos theta/2 = sqrt((1 + cos theta) / 2)`` and ``sin theta/2 = sqrt((1 - cos theta) /
+    2)``, the larger is taken from its root and the smaller from ``sin theta = 2 cos sin``, so
+    neither loses digits where the other is near zero.
+    """
+    r = math.sqrt(c * c + s * s)
+    if r == 0.0:
+        return 1.0, 0.0
+    if c >= 0.0:
+        cos_half = math.sqrt(0.5 * (1.0 + c / r))
+        return cos_half, 0.5 * s / (r * cos_half)
+    sin_half = math.sqrt(0.5 * (1.0 - c / r))
+    return 0.5 * abs(s) / (r * sin_half), math.copysign(sin_half, s)
+
+
+@njit(cache=True)
+def _quarter_turns(half, turns):
+    """``half`` (cos, sin) turned by ``turns`` quarter turns: half of ``turns`` half turns."""
+    k = turns - 4.0 * math.floor(0.25 * turns)
+    c, s = half
+    if k == 1.0:
+        return -s, c
+    if k == 2.0:
+        return -c, -s
+    if k == 3.0:
+        return s, -c
+    return c, s
+
+
+@njit(cache=True)
+def _half_polar(m):
+    """``(cos, sin)`` of half the angle between m and the working axis 3 (in [0, pi])."""
+    return _half_angle(m[2], math.sqrt(m[0] * m[0] + m[1] * m[1]))
 
 
 @njit(cache=True)
 def _zyz(a, b, c):
-    """Quaternion ``(x, y, z, w)`` of ``Rz(a) Ry(b) Rz(c)``."""
-    half_b = 0.5 * b
-    diff, total = 0.5 * (c - a), 0.5 * (a + c)
-    return (math.sin(half_b) * math.sin(diff), math.sin(half_b) * math.cos(diff),
-            math.cos(half_b) * math.sin(total), math.cos(half_b) * math.cos(total))
+    """Quaternion ``(x, y, z, w)`` of ``Rz(alpha) Ry(beta) Rz(gamma)``.
+
+    ``a``, ``b`` and ``c`` are (cos, sin) of alpha / 2, beta / 2 and gamma / 2.
+    """
+    sin_diff, cos_diff = c[1] * a[0] - c[0] * a[1], c[0] * a[0] + c[1] * a[1]
+    sin_total, cos_total = a[1] * c[0] + a[0] * c[1], a[0] * c[0] - a[1] * c[1]
+    return (b[1] * sin_diff, b[1] * cos_diff, b[0] * sin_total, b[0] * cos_total)
