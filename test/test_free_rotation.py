@@ -205,6 +205,25 @@ def test_spin_near_the_intermediate_axis_follows_euler_equations(offset, steps):
     assert np.linalg.norm(m[0] - m_ref) <= 1e-12 * np.linalg.norm(m_ref)
 
 
+@pytest.mark.parametrize('m0', [(0.02, 10.0, 0.04), (0.05, 10.0, 0.1), (0.1, 10.0, 0.3),
+                                (0.3, 10.0, 0.6)])
+@pytest.mark.parametrize('duration', [1e-3, 0.1])
+def test_spin_just_outside_the_separatrix_band_is_exact_to_round_off(m0, duration):
+    """Bodies with (L^2 - 2 E I2) / L^2 from 1e-6 to 3e-4: mc just above NEAR_SEPARATRIX.
+
+    There sn and cn come from mc itself by the arithmetic-geometric mean; from k^2 = 1 - mc
+    (as scipy's ellipj takes it) cn would carry an absolute error ~eps, which the
+    third-kind integral's slope 1 / dn ~ 1 / sqrt(mc) turned into orientation errors of
+    up to 5e-13 rad in one step. One step of 1 ms or 0.1 s follows Euler's equations to
+    5e-14 rad and the momentum to 1e-15.
+    """
+    m0 = np.array(m0)
+    m_ref, q_ref = near_axis_solution(m0, duration)
+    m, q = torque_free_flow(MOMENTS[None], m0[None], START[None], duration)
+    assert quat_angle(q_ref, q[0]) <= 5e-14
+    assert np.linalg.norm(m[0] - m_ref) <= 1e-15 * np.linalg.norm(m_ref)
+
+
 def random_bodies(n, seed):
     """Random moments (a few symmetric or on the separatrix), momenta and orientations."""
     rng = np.random.default_rng(seed)

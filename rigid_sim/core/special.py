@@ -1,15 +1,16 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""Elliptic functions inside compiled code: scipy's, and Carlson's R_F and R_J.
+"""Elliptic functions inside compiled code: scipy's K, Jacobi's sn and cn, Carlson's R_F, R_J.
 
-``ellipj`` and ``ellipkm1`` are those of ``scipy.special.cython_special``. Carlson's
-symmetric integrals are written out here by his duplication method (B. C. Carlson,
-Numerical Algorithms 10, 1995; the series and tolerances as in Numerical Recipes 3rd ed.,
-6.12): the free flow calls three per body and drift, and scipy's cost more for the same
+``ellipkm1`` is that of ``scipy.special.cython_special``. The others are written out here,
+where the free flow calls them per body and drift and scipy's cost more for the same
 double-precision result (docs/performance.md has the timings); scipy's stay the reference
-the tests compare with.
+the tests compare with. ``sn`` and ``cn`` come from the complementary parameter ``mc``
+itself (scipy's ``ellipj`` takes ``m = 1 - mc``, which rounds small ``mc`` away). Carlson's
+symmetric integrals are his duplication method (B. C. Carlson, Numerical Algorithms 10,
+1995; the series and tolerances as in Numerical Recipes 3rd ed., 6.12).
 
-Each C function is registered with LLVM under a symbol of its own and declared to numba as
+The C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
 address: that keeps ``cache=True`` working (an address is valid only in the process that
 took it). The registration runs at import, before any cached kernel is loaded.
@@ -17,23 +18,19 @@ took it). The registration runs at import, before any cached kernel is loaded.
 import math
 
 import llvmlite.binding as llvm
-from numba import njit, types
+from numba import carray, njit, types
 from numba.core import cgutils
 from numba.extending import get_cython_function_address, intrinsic
 
-_MODULE = 'scipy.special.cython_special'
-_DOUBLE_POINTER = types.CPointer(types.double)
-# Symbol, cython_special export, signature (the trailing int: Cython's skip-dispatch flag).
-_EXPORTS = {
-    'rigid_sim_ellipj': ('ellipj', types.void(types.double, types.double, _DOUBLE_POINTER,
-                                              _DOUBLE_POINTER, _DOUBLE_POINTER,
-                                              _DOUBLE_POINTER)),
-    'rigid_sim_ellipkm1': ('ellipkm1', types.double(types.double, types.intc)),
-}
-for _symbol, (_export, _) in _EXPORTS.items():
-    llvm.add_symbol(_symbol, get_cython_function_address(_MODULE, _export))
-_ellipj = types.ExternalFunction('rigid_sim_ellipj', _EXPORTS['rigid_sim_ellipj'][1])
-_ellipkm1 = types.ExternalFunction('rigid_sim_ellipkm1', _EXPORTS['rigid_sim_ellipkm1'][1])
+_SYMBOL = 'rigid_sim_ellipkm1'
+llvm.add_symbol(_SYMBOL, get_cython_function_address('scipy.special.cython_special', 'ellipkm1'))
+# The signature's trailing int is Cython's skip-dispatch flag.
+_ellipkm1 = types.ExternalFunction(_SYMBOL, types.double(types.double, types.intc))
+# The arithmetic-geometric mean stops once c_n / a_n is below this: it converges
+# quadratically, so the next ratio would be ~1e-18, and rounding keeps c_n ~ eps a_n from
+# ever falling much below that (about 9 steps from mc = 1e-30, 12 from mc = 1e-300).
+AGM_TOL = 1e-9
+AGM_MAX_STEPS = 64
 # Duplication stops when every argument is within this of their mean: the truncated series
 # then errs ~TOL^6, below double precision (Numerical Recipes' choices for doubles).
 RF_TOL, RJ_TOL = 0.0025, 0.0015
@@ -43,33 +40,38 @@ MAX_DUPLICATIONS = 600
 
 
 @intrinsic
-def _four_doubles(typingctx):
-    """Four doubles on the stack, as pointers: ``ellipj``'s outputs without an allocation."""
-    signature = types.UniTuple(_DOUBLE_POINTER, 4)()
-
+def _agm_ratios(typingctx):
+    """AGM_MAX_STEPS doubles in the caller's stack frame: no allocation per call."""
     def codegen(context, builder, sig, args):
-        """Allocate the four doubles in the caller's stack frame."""
-        double = context.get_value_type(types.double)
-        pointers = [cgutils.alloca_once(builder, double) for _ in range(4)]
-        return context.make_tuple(builder, sig.return_type, pointers)
-    return signature, codegen
-
-
-@intrinsic
-def _load(typingctx, pointer):
-    """Load the double that ``pointer`` points to."""
-    def codegen(context, builder, sig, args):
-        """Load through the pointer."""
-        return builder.load(args[0])
-    return types.double(pointer), codegen
+        """Allocate the doubles once, in the function's entry block."""
+        count = context.get_constant(types.intp, AGM_MAX_STEPS)
+        return cgutils.alloca_once(builder, context.get_value_type(types.double), size=count)
+    return types.CPointer(types.double)(), codegen
 
 
 @njit(cache=True)
-def ellipj(u, m):
-    """Jacobi ``sn``, ``cn``, ``dn`` of ``u`` at parameter ``m = k^2``."""
-    sn, cn, dn, amplitude = _four_doubles()
-    _ellipj(u, m, sn, cn, dn, amplitude)
-    return _load(sn), _load(cn), _load(dn)
+def sn_cn(u, mc):
+    """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from ``mc`` > 0.
+
+    Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
+    mean of (1, sqrt(mc)) gives a_n and c_n = (a_{n-1} - b_{n-1}) / 2 until c_N vanishes;
+    then phi_N = 2^N a_N u and ``phi_{n-1} = (phi_n + arcsin(c_n / a_n sin phi_n)) / 2``
+    down to the amplitude phi_0: sn = sin phi_0, cn = cos phi_0.
+    """
+    ratios = carray(_agm_ratios(), AGM_MAX_STEPS)
+    a, b = 1.0, math.sqrt(mc)
+    steps = 0
+    for _ in range(AGM_MAX_STEPS):
+        c = 0.5 * (a - b)
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        ratios[steps] = c / a
+        steps += 1
+        if ratios[steps - 1] < AGM_TOL:
+            break
+    phi = 2.0 ** steps * a * u
+    for n in range(steps - 1, -1, -1):
+        phi = 0.5 * (phi + math.asin(ratios[n] * math.sin(phi)))
+    return math.sin(phi), math.cos(phi)
 
 
 @njit(cache=True)

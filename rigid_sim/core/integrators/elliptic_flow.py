@@ -12,23 +12,18 @@ import numpy as np
 from numba import njit
 
 from rigid_sim.core import kinematics as kin
-from rigid_sim.core.special import ellipj, ellipkm1, elliprf, elliprj
+from rigid_sim.core.special import ellipkm1, elliprf, elliprj, sn_cn
 
 # Near the separatrix (a spin close to the intermediate axis) cn(u) is as small as
 # ~sqrt(mc) over most of a period, and the orientation needs it to its own relative accuracy:
-# the third-kind integral's slope there is 1 / dn ~ 1 / sqrt(mc). scipy's ellipj takes only
-# m = 1 - mc and returns cn = cos(am u) to an absolute eps: an orientation error of
-# ~eps / sqrt(mc) per step (1e-4 rad at mc ~ 1e-24, O(1) once m rounds to 1; 1e-13 at this
-# mc). Below it, sn and cn come from mc itself.
+# the third-kind integral's slope there is 1 / dn ~ 1 / sqrt(mc). The descending Gauss
+# transformation returns cn = cos(am u) to an absolute eps: an orientation error of
+# ~eps / sqrt(mc) per step (1e-4 rad at mc ~ 1e-24; 1e-13 at this mc). Below it, cn comes
+# from sd near a quarter period, a number of order one times sqrt(mc).
 NEAR_SEPARATRIX = 1e-6
 # Below this mc, sn and cn on [0, K/2] are tanh and sech with their first-order correction in
 # mc (Abramowitz and Stegun 16.15), whose error there is below ~16 mc relative.
 EXPANSION_MC = 1e-16
-# The arithmetic-geometric mean stops once c_n / a_n is below this: it converges
-# quadratically, so the next ratio would be ~1e-18, and rounding keeps c_n ~ eps a_n from
-# ever falling much below that (about 9 steps from mc = 1e-30, 12 from mc = 1e-300).
-AGM_TOL = 1e-9
-AGM_MAX_STEPS = 64
 
 
 @njit(cache=True)
@@ -49,19 +44,18 @@ def _unit_interval(x):
 
 @njit(cache=True)
 def _invariants(i, m):
-    """Parameters k^2, mc, squared amplitudes' roots (3-tuple) and rate of m(t)."""
+    """Complementary parameter mc, squared amplitudes' roots (3-tuple) and rate of m(t)."""
     i1, i2, i3 = i
     m1, m2, m3 = m[0] ** 2, m[1] ** 2, m[2] ** 2
     above = m1 * (i3 - i1) / i1 + m2 * (i3 - i2) / i2   # 2 E I3 - L^2, no cancellation
     below = m2 * (i2 - i1) / i2 + m3 * (i3 - i1) / i3   # L^2 - 2 E I1, no cancellation
-    k2 = _unit_interval(above * (i2 - i1) / (below * (i3 - i2)))
     mc = _unit_interval((i3 - i1) * separatrix_gap(i, m) / (below * (i3 - i2)))
     amplitude = (math.sqrt(above * i1 / (i3 - i1)), math.sqrt(above * i2 / (i3 - i2)),
                  math.sqrt(below * i3 / (i3 - i1)))
     rate = math.sqrt(below * (i3 - i2) / (i1 * i2 * i3))
     if m[2] != 0.0:
         rate *= _sign(m[2]) * _sign(i3 - i1)
-    return k2, mc, amplitude, rate
+    return mc, amplitude, rate
 
 
 @njit(cache=True)
@@ -72,32 +66,6 @@ def _pi_minus(nu, s, c, dn2, first_kind):
     ``F(phi | k^2)``, the Carlson R_F part the two integrals share.
     """
     return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
-
-
-@njit(cache=True)
-def _sn_cn_complementary(u, mc):
-    """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from ``mc`` > 0.
-
-    Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
-    mean of (1, sqrt(mc)) gives a_n and c_n = (a_{n-1} - b_{n-1}) / 2 until c_N vanishes;
-    then phi_N = 2^N a_N u and ``phi_{n-1} = (phi_n + arcsin(c_n / a_n sin phi_n)) / 2``
-    down to the amplitude phi_0: sn = sin phi_0, cn = cos phi_0. Started from mc itself, it
-    keeps the accuracy scipy's ``ellipj(u, 1 - mc)`` loses for small mc.
-    """
-    a, b = 1.0, math.sqrt(mc)
-    ratios = np.empty(AGM_MAX_STEPS)
-    steps = 0
-    for _ in range(AGM_MAX_STEPS):
-        c = 0.5 * (a - b)
-        a, b = 0.5 * (a + b), math.sqrt(a * b)
-        ratios[steps] = c / a
-        steps += 1
-        if ratios[steps - 1] < AGM_TOL:
-            break
-    phi = 2.0 ** steps * a * u
-    for n in range(steps - 1, -1, -1):
-        phi = 0.5 * (phi + math.asin(ratios[n] * math.sin(phi)))
-    return math.sin(phi), math.cos(phi)
 
 
 @njit(cache=True)
@@ -124,7 +92,7 @@ def _sn_cn_near_separatrix(v, mc, quarter):
     if mc < EXPANSION_MC:
         sn_w, cn_w = _sn_cn_first_order(w, mc)
     else:
-        sn_w, cn_w = _sn_cn_complementary(w, mc)
+        sn_w, cn_w = sn_cn(w, mc)
     dn_w = math.sqrt(cn_w * cn_w + mc * sn_w * sn_w)
     if far:
         return _sign(v) * cn_w / dn_w, math.sqrt(mc) * sn_w / dn_w
@@ -132,16 +100,17 @@ def _sn_cn_near_separatrix(v, mc, quarter):
 
 
 @njit(cache=True)
-def _jacobi_sn_cn(v, k2, mc, quarter):
-    """Evaluate ``sn`` and ``cn`` of the reduced ``v`` (|v| <= K) at ``k^2``.
+def _jacobi_sn_cn(v, mc, quarter):
+    """Evaluate ``sn`` and ``cn`` of the reduced ``v`` (|v| <= K) at ``m = 1 - mc``.
 
-    scipy's ``ellipj`` away from the separatrix; near it, from ``mc`` (on it, mc = 0,
-    ellipj's tanh and sech are exact).
+    On the separatrix (mc = 0) they are tanh and sech; near it cn is kept to its relative
+    accuracy (:func:`_sn_cn_near_separatrix`).
     """
-    if 0.0 < mc < NEAR_SEPARATRIX:
+    if mc == 0.0:
+        return math.tanh(v), 1.0 / math.cosh(v)
+    if mc < NEAR_SEPARATRIX:
         return _sn_cn_near_separatrix(v, mc, quarter)
-    sn, cn, _ = ellipj(v, k2)
-    return sn, cn
+    return sn_cn(v, mc)
 
 
 @njit(cache=True)
@@ -175,7 +144,7 @@ def elliptic_working(i, m, time, ratio, nu):
     core : 4-tuple of float
         Quaternion (x, y, z, w) of the step's rotation in the working frame.
     """
-    k2, mc, amp, rate = _invariants(i, m)
+    mc, amp, rate = _invariants(i, m)
     h = math.hypot(ratio * m[1], m[0])
     s0 = ratio * m[1] / h if h > 0.0 else 0.0
     c0 = m[0] / h if h > 0.0 else 1.0
@@ -186,7 +155,7 @@ def elliptic_working(i, m, time, ratio, nu):
     turns = np.rint(u1 / (2.0 * quarter)) if math.isfinite(quarter) else 0.0
     shift = 2.0 * turns * quarter if turns != 0.0 else 0.0
     v = u1 - shift
-    sn, cn = _jacobi_sn_cn(v, k2, mc, quarter)
+    sn, cn = _jacobi_sn_cn(v, mc, quarter)
     dn2 = cn * cn + mc * sn * sn
     complete = 0.0   # Pi(-nu | k^2): only a body passing a half period needs it
     if turns != 0.0:

@@ -23,10 +23,11 @@ call it per body and one body's branch never costs another anything.
 
 Precision: the result is exact up to ~1e-15 relative per call times the phase
 ``|lambda| dt``. Near the separatrix the complementary parameter ``mc = 1 - k^2`` is computed
-from ``L^2 - 2 E I2`` without cancellation and used for ``K``, ``u0`` and ``dn``, but
-``scipy.special.ellipj`` takes ``k^2`` itself, so the phase error grows like
-``eps * (half-periods travelled) / mc``; the state itself fixes ``mc`` only to relative
-``eps / mc``, so this is the conditioning of the problem, not a loss of the method.
+from ``L^2 - 2 E I2`` without cancellation and used for ``K``, ``u0``, ``sn``, ``cn`` and
+``dn`` (never ``k^2``, which rounds a small ``mc`` away). The state itself fixes ``mc`` only
+to relative ``eps / mc``, so over many half periods the phase error grows like
+``eps * (half-periods travelled) / mc``: the conditioning of the problem, not a loss of the
+method.
 No NaN is produced for ``mc -> 0`` (on the separatrix ``K = inf`` and no period is reduced).
 """
 import math
