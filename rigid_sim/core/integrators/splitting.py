@@ -150,8 +150,9 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
                         a, b, drift):
     """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
 
-    Adjacent half kicks of consecutive sub-steps act at the same state and time, so they
-    merge: a composition of k Strang steps costs k + 1 kicks.
+    Within one substep, the half kicks that end one Strang step of the composition and start
+    the next act at the same state and time, so they merge: a substep of k Strang steps (k
+    weights) costs k + 1 kicks. Consecutive substeps each keep their own end kicks.
     """
     for k in range(substeps):
         t = time + k * h
