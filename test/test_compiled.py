@@ -69,13 +69,37 @@ def test_carlson_integrals_match_scipy():
     assert abs(elliprf(0.0, 1.0, 1.0) - np.pi / 2.0) < 4e-16
 
 
-def test_carlson_third_kind_matches_scipy_on_both_branches():
-    """R_J agrees with scipy's where (p - x)(p - y)(p - z) is negative too, and R_J(x, x, x, x).
+def test_jacobi_sn_cn_from_the_complementary_parameter():
+    """sn and cn of u in [-K, K] at m = 1 - mc, mc from 1e-6 to 1, against 30-digit mpmath.
+
+    Both to an absolute 2e-15, with m formed from mc exactly on mpmath's side; scipy's
+    ellipj, which takes m itself, errs by up to 1.2e-14 there. (Below mc = 1e-6 the flow
+    takes cn near a quarter period from sd instead: elliptic_flow.NEAR_SEPARATRIX.)
+    """
+    import mpmath
+    from scipy.special import ellipkm1
+    from rigid_sim.core.special import sn_cn
+    rng = np.random.default_rng(5)
+    with mpmath.workdps(30):
+        for _ in range(300):
+            mc = 10.0 ** rng.uniform(-6.0, 0.0)
+            u = rng.uniform(-1.0, 1.0) * ellipkm1(mc)
+            m = 1 - mpmath.mpf(mc)
+            sn, cn = sn_cn(u, mc)
+            assert abs(sn - float(mpmath.ellipfun('sn', u, m=m))) < 2e-15
+            assert abs(cn - float(mpmath.ellipfun('cn', u, m=m))) < 2e-15
+
+
+def test_carlson_third_kind_on_both_branches_and_far_below():
+    """R_J where (p - x)(p - y)(p - z) is negative too, against scipy and 40-digit mpmath.
 
     The sign of that product chooses between the arctangent and the inverse hyperbolic
     tangent in each duplication's R_C term; the free flow only reaches the first (p > 1 >= x,
-    y, z), so p below x, y or z is drawn here. R_J(x, x, x, x) = x^-3/2 is DLMF 19.20.15.
+    y, z), so p below x, y or z is drawn here. Far below them (p from 1e-9 to 1e-300) the
+    term's 1 + e_m would cancel if summed as written; there scipy's own R_J errs by up to
+    3e-13, so mpmath is the reference. R_J(x, x, x, x) = x^-3/2 is DLMF 19.20.15.
     """
+    import mpmath
     from scipy import special as reference
     from rigid_sim.core.special import elliprj
     rng = np.random.default_rng(4)
@@ -86,5 +110,11 @@ def test_carlson_third_kind_matches_scipy_on_both_branches():
         negative += (p - x) * (p - y) * (p - z) < 0.0
         assert abs(elliprj(x, y, z, p) / reference.elliprj(x, y, z, p) - 1.0) < 1e-14
     assert negative > 200
+    for x, y, z in ((1.0, 2.0, 3.0), (3.3158, 7.7985, 1.4402)):
+        for p in (3e-9, 1e-12, 1e-20, 1e-300):
+            # mpmath's own duplication cancels ~log10(1 / p) digits: 400 leave 100 to spare.
+            with mpmath.workdps(400):
+                exact = mpmath.elliprj(x, y, z, p)
+                assert abs(float((elliprj(x, y, z, p) - exact) / exact)) < 1e-15
     for x in (1e-3, 0.7, 9.0):
         assert abs(elliprj(x, x, x, x) * x ** 1.5 - 1.0) < 4e-16

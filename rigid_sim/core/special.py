@@ -51,7 +51,7 @@ def _agm_ratios(typingctx):
 
 @njit(cache=True)
 def sn_cn(u, mc):
-    """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from ``mc`` > 0.
+    """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from 0 < ``mc`` <= 1.
 
     Descending Gauss transformation (Abramowitz and Stegun 16.4): the arithmetic-geometric
     mean of (1, sqrt(mc)) gives a_n and c_n = (a_{n-1} - b_{n-1}) / 2 until c_N vanishes;
@@ -106,15 +106,22 @@ RC_SERIES = 1e-3
 
 
 @njit(cache=True)
-def _elliprc_one(e):
-    """Carlson's ``R_C(1, 1 + e)`` for e > -1: ``atan(sqrt e) / sqrt e`` or its atanh twin."""
+def _elliprc_one(e, sp, p, lam, d):
+    """Carlson's ``R_C(1, 1 + e)``, e > -1: ``atan(sqrt e) / sqrt e`` or its atanh twin.
+
+    ``sp``, ``p``, ``lam`` and ``d`` are sqrt p, p, lambda and d_m of R_J's same step. Where
+    ``e`` nears -1 (p far below x, y and z) the sum ``1 + e`` would cancel; it is
+    ``2 sqrt(p) (p + lambda) / d``, since ``d^2 + 4^(-3m) delta = 2 d sqrt(p) (p + lambda)``,
+    and the inverse hyperbolic tangent is taken as ``log((1 + r) / sqrt(1 + e)) / r``.
+    """
     if abs(e) < RC_SERIES:
         return 1.0 - e * (1.0 / 3.0 - e * (0.2 - e * (1.0 / 7.0 - e / 9.0)))
+    root = math.sqrt(abs(e))
     if e > 0.0:
-        root = math.sqrt(e)
         return math.atan(root) / root
-    root = math.sqrt(-e)
-    return math.atanh(root) / root
+    if e > -0.5:
+        return math.atanh(root) / root
+    return math.log((1.0 + root) / math.sqrt(2.0 * sp * (p + lam) / d)) / root
 
 
 @njit(cache=True)
@@ -135,7 +142,8 @@ def elliprj(x, y, z, p):
         sx, sy, sz, sp = math.sqrt(x), math.sqrt(y), math.sqrt(z), math.sqrt(p)
         lam = sx * (sy + sz) + sy * sz
         d = (sp + sx) * (sp + sy) * (sp + sz)
-        total += factor * _elliprc_one(factor * factor * factor * delta / (d * d)) / d
+        e = factor * factor * factor * delta / (d * d)
+        total += factor * _elliprc_one(e, sp, p, lam, d) / d
         factor *= 0.25
         x, y, z, p = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam), 0.25 * (p + lam)
         mean = 0.2 * (x + y + z + p + p)

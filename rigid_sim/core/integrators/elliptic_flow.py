@@ -185,7 +185,8 @@ def _half_angle(c, s):
 
     Of ``cos theta/2 = sqrt((1 + cos theta) / 2)`` and ``sin theta/2 = sqrt((1 - cos theta) /
     2)``, the larger is taken from its root and the smaller from ``sin theta = 2 cos sin``, so
-    neither loses digits where the other is near zero.
+    neither loses digits where the other is near zero. ``c`` and ``s`` are of order one (the
+    flow's are scaled), so their squares neither overflow nor underflow.
     """
     r = math.sqrt(c * c + s * s)
     if r == 0.0:
