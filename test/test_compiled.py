@@ -70,9 +70,9 @@ def test_carlson_integrals_match_scipy():
 
 
 def test_jacobi_sn_cn_from_the_complementary_parameter():
-    """sn and cn of u in [-K, K] at m = 1 - mc, mc from 1e-6 to 1, against 30-digit mpmath.
+    """Jacobi sn and cn of u in [-K, K], m = 1 - mc, mc from 1e-6 to 1, against mpmath.
 
-    Both to an absolute 2e-15, with m formed from mc exactly on mpmath's side; scipy's
+    Both to an absolute 2e-15 (30 digits, m formed from mc exactly on mpmath's side); scipy's
     ellipj, which takes m itself, errs by up to 1.2e-14 there. (Below mc = 1e-6 the flow
     takes cn near a quarter period from sd instead: elliptic_flow.NEAR_SEPARATRIX.)
     """
