@@ -23,7 +23,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.signals import SignalHandlerOptions
 
 from rigid_sim.core.scene import SceneError
-from rigid_sim.executor import make_executor
+from rigid_sim.executor import freeze_long_lived_objects, make_executor
 from rigid_sim.node import NODE_NAME, RigidSimNode
 from rigid_sim.parameters import ParameterError
 
@@ -75,6 +75,7 @@ def _run(stopper):
     except (ParameterError, SceneError, FileNotFoundError) as error:
         rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
         return 1
+    freeze_long_lived_objects()   # no full garbage collection stalls a tick from here on
     executor = make_executor()
     executor.add_node(node)
     stopper.spinning = True

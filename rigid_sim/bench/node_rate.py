@@ -30,7 +30,7 @@ from rclpy.parameter import Parameter
 import rigid_sim
 from rigid_sim import bench
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
-from rigid_sim.executor import make_executor
+from rigid_sim.executor import freeze_long_lived_objects, make_executor
 from rigid_sim.node import RigidSimNode
 from rigid_sim.resources import find_scene
 
@@ -193,6 +193,7 @@ def measure(config, integrator, context, scene, log_dir, seconds):
                   integrator=integrator)
     node = TimedNode(context=context, parameter_overrides=[
         Parameter(name, value=value) for name, value in values.items()])
+    freeze_long_lived_objects()   # as rigid_sim_node does before it spins
     executor = make_executor(context)   # as rigid_sim_node runs it
     executor.add_node(node)
     topics = claimed_topics(node, config)
