@@ -4,11 +4,12 @@
 
 ``ellipkm1`` is that of ``scipy.special.cython_special``. The others are written out here,
 where the free flow calls them per body and drift and scipy's cost more for the same
-double-precision result (docs/performance.md has the timings); scipy's stay the reference
-the tests compare with. ``sn`` and ``cn`` come from the complementary parameter ``mc``
-itself (scipy's ``ellipj`` takes ``m = 1 - mc``, which rounds small ``mc`` away). Carlson's
-symmetric integrals are his duplication method (B. C. Carlson, Numerical Algorithms 10,
-1995; the series and tolerances as in Numerical Recipes 3rd ed., 6.12).
+double-precision result (docs/performance.md has the timings). The tests compare them with
+scipy's and, where scipy's lose digits (sn and cn at small ``mc``, R_J with ``p`` far below
+the others), with mpmath's at high precision. ``sn`` and ``cn`` come from the complementary
+parameter ``mc`` itself (scipy's ``ellipj`` takes ``m = 1 - mc``, which rounds small ``mc``
+away). Carlson's symmetric integrals are his duplication method (B. C. Carlson, Numerical
+Algorithms 10, 1995; the series and tolerances as in Numerical Recipes 3rd ed., 6.12).
 
 The C function is registered with LLVM under a symbol of its own and declared to numba as
 an external function of that name, so compiled code refers to it by name, not by an
