@@ -1,7 +1,16 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""The node's control services: pause, step (lockstep) and reset."""
+"""The node's control services: pause, step (lockstep) and reset.
+
+Every call is answered (queues of :data:`rigid_sim.deferred.REQUEST_QUEUE_DEPTH`). A
+``~/step`` is a :class:`~rigid_sim.tick_loop.StepJob`: its ticks run in slices between which
+the executor serves other calls, and it is answered when they have run, or when a ``~/pause``
+call or a reset ends it early (the answer says how many ran).
+"""
 from std_srvs.srv import SetBool, Trigger
+
+from rigid_sim import deferred
+from rigid_sim.tick_loop import StepJob
 
 
 class SimControl:
@@ -13,37 +22,44 @@ class SimControl:
         Serves the services.
     paused : bool
         Whether integration starts paused.
+    loop : rigid_sim.tick_loop.TickLoop
+        Runs step jobs and is told every change of the pause state.
     reset : callable
         ``reset()`` sends the simulation back to its initial state.
-    step : callable
-        ``step()`` advances ``step_ticks`` ticks, publishing each, and returns how many.
+    step_ticks : callable
+        ``step_ticks()`` is the number of ticks one ``~/step`` advances.
     now : callable
         ``now()`` is the current simulated time, s.
-    paused_changed : callable
-        ``paused_changed(paused)`` is told every change of the pause state.
     """
 
-    def __init__(self, node, paused, reset, step, now, paused_changed):
+    def __init__(self, node, paused, loop, reset, step_ticks, now):
         self.paused = paused
-        self._reset, self._step, self._now = reset, step, now
-        self._paused_changed = paused_changed
-        node.create_service(Trigger, '~/reset', self._on_reset)
-        node.create_service(SetBool, '~/pause', self._on_pause)
-        node.create_service(Trigger, '~/step', self._on_step)
+        self._loop = loop
+        self._reset, self._step_ticks, self._now = reset, step_ticks, now
+        self.before_step = lambda: None   # called as a step job is queued
+        deferred.create_service(node, Trigger, '~/reset', self._on_reset)
+        deferred.create_service(node, SetBool, '~/pause', self._on_pause)
+        deferred.create_service(node, Trigger, '~/step', self._on_step)
 
-    def _on_reset(self, request, response):
+    def _on_reset(self, request, response, reply):
+        self._loop.end_jobs('ended by ~/reset')
         self._reset()
         response.success, response.message = True, 'back to the initial state at time 0'
         return response
 
-    def _on_pause(self, request, response):
-        self.paused = bool(request.data)
-        self._paused_changed(self.paused)
+    def set_paused(self, paused):
+        """Pause or resume integration; a step job running or queued ends after its tick."""
+        self._loop.end_jobs('ended by ~/pause')
+        self.paused = paused
+        self._loop.set_paused(paused)
+
+    def _on_pause(self, request, response, reply):
+        self.set_paused(bool(request.data))
         response.success = True
         response.message = f'{"paused" if self.paused else "running"} at {self._now():g} s'
         return response
 
-    def _on_step(self, request, response):
+    def _on_step(self, request, response, reply):
         # repr: the shortest text that reads back as the same float, so a client can
         # parse the exact simulated time.
         if not self.paused:
@@ -51,7 +67,18 @@ class SimControl:
             response.message = (f'refused: ~/step advances only while paused (running at '
                                 f'{self._now()!r} s); call ~/pause with true first')
             return response
-        ticks = self._step()
-        response.success = True
-        response.message = f'advanced {ticks} ticks to {self._now()!r} s'
+        self.start_steps(self._step_ticks(), lambda ran, why: reply(self._answer(
+            response, ran, why)))
+        return deferred.LATER
+
+    def start_steps(self, ticks, done):
+        """Queue a job of ``ticks`` ticks; ``done(ran, why)`` when it ends."""
+        self.before_step()
+        self._loop.run_job(StepJob(ticks, done))
+
+    def _answer(self, response, ran, why):
+        response.success = not why
+        response.message = f'advanced {ran} ticks to {self._now()!r} s'
+        if why:
+            response.message += f' ({why})'
         return response

@@ -37,7 +37,7 @@ class DiagnosticsOutput:
         """Start a new window at ``sim_time`` (after a reset or a new scene)."""
         self.stats = TickStats(sim_time)
 
-    def publish(self, world, settings, paused, refusals, dropped):
+    def publish(self, world, settings, paused, refusals, dropped, since_tick=None, extra=()):
         """Publish the window's status and start a new window.
 
         Parameters
@@ -52,6 +52,10 @@ class DiagnosticsOutput:
             Refused inputs per body and the last reason.
         dropped : int
             Ticks given up behind wall time in the window.
+        since_tick : float or None
+            s of wall time since the latest tick, where ticks are due on the wall clock.
+        extra : dict
+            Further values to report (the reconfiguration's).
         """
         target = settings.real_time_factor
         values = {'simulated time [s]': world.time, 'paused': paused,
@@ -60,9 +64,10 @@ class DiagnosticsOutput:
                                   'none (rate 0: as fast as possible)' if target is None
                                   else target),
                   'ticks dropped behind wall time': dropped,
-                  **refusal_values(refusals.counts, refusals.last, refusals.superseded)}
+                  **refusal_values(refusals.counts, refusals.last, refusals.superseded),
+                  **dict(extra)}
         period = 1.0 / settings.rate if settings.rate > 0.0 else None
-        level, summary = health(self.stats, period, dropped)
+        level, summary = health(self.stats, period, dropped, since_tick)
         self._publisher.publish(conversions.diagnostics(
             f'{self._node.get_name()}: physics', world.time, level, summary, values))
         self.restart(world.time)

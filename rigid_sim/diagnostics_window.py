@@ -70,7 +70,11 @@ def refusal_values(refused, last_refusal, superseded):
             'superseded inputs': sum(superseded.values())}
 
 
-def health(stats, tick_period, dropped=0):
+# A tick this many periods late means the loop has stopped, not merely jittered.
+STALL_PERIODS = 2.0
+
+
+def health(stats, tick_period, dropped=0, since_tick=None):
     """Grade the window that ``stats`` covers: a diagnostic level and a summary.
 
     Parameters
@@ -81,7 +85,14 @@ def health(stats, tick_period, dropped=0):
         s of wall time per tick; None when the node ticks as fast as it can.
     dropped : int
         Ticks given up in the window because the simulation fell behind wall time.
+    since_tick : float or None
+        s of wall time since the latest tick; None where no tick is due (paused at rate 0,
+        or ticked by the caller).
     """
+    if (tick_period is not None and since_tick is not None
+            and since_tick > STALL_PERIODS * tick_period):
+        return DiagnosticStatus.ERROR, (f'no tick for {since_tick:.3g} s, one is due every '
+                                        f'{tick_period:.3g} s')
     if stats.failed_ticks:
         return DiagnosticStatus.ERROR, (f'{stats.failed_ticks} ticks stopped at a step that '
                                         f'stayed non-finite; state kept')

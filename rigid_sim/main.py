@@ -18,15 +18,8 @@ import os
 import signal
 import sys
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
-from rclpy.signals import SignalHandlerOptions
-
-from rigid_sim.core.scene import SceneError
-from rigid_sim.executor import freeze_long_lived_objects, make_executor
-from rigid_sim.node import NODE_NAME, RigidSimNode
-from rigid_sim.parameters import ParameterError
-
+# Only the standard library above: the handlers are installed before the heavy imports
+# (rclpy, numba, scipy: about a second), so a signal in the first milliseconds is not lost.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 # s; the executor waits at most this long for work, so a signal that arrives while it
 # waits (a slow rate, a paused loop) is acted on within this time.
@@ -60,6 +53,8 @@ def main(args=None):
     stopper = _Stopper()
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         return _run(stopper)
@@ -70,6 +65,13 @@ def main(args=None):
 
 
 def _run(stopper):
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    from rigid_sim.core.scene import SceneError
+    from rigid_sim.executor import freeze_long_lived_objects, make_executor
+    from rigid_sim.node import NODE_NAME, RigidSimNode
+    from rigid_sim.parameters import ParameterError
     try:
         node = RigidSimNode()
     except (ParameterError, SceneError, FileNotFoundError) as error:

@@ -11,7 +11,7 @@ world and publishes; tests call it directly for deterministic steps.
 """
 import time
 
-from rcl_interfaces.msg import SetParametersResult
+from numba.core import config as numba_config
 from rclpy.node import Node
 
 from rigid_sim import parameters
@@ -25,6 +25,7 @@ from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, StateOutputs
 from rigid_sim.qos_overrides import QosOverrides
+from rigid_sim.reconfiguration import Reconfiguration
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
 
@@ -43,33 +44,40 @@ def load(settings):
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
 
-def warm_up(world, integrator, logger):
-    """Compile or load ``world``'s kernels, logging one line as compiling starts; the count.
+def warm_up(world, name, logger, integrator=None):
+    """Compile or load ``world``'s kernels, logging what compiles and why; the count.
 
-    Nothing is logged when every kernel is in memory or numba's disk cache; otherwise one
-    line before the first compilation and the seconds it took after. At start this runs
-    after the node has said what it simulates and before it creates its topics and
-    services, so a client that finds one is answered without a compile's delay. After a
-    scene or integrator change it runs in the parameter callback and blocks the executor
-    (the tick too) for as long, the time the first step would otherwise take.
+    Nothing is logged when every kernel is in memory or numba's disk cache; otherwise a line
+    before the first compilation, one every ``PROGRESS_PERIOD`` seconds while it goes on,
+    and the seconds it took after. At start this runs before the node creates its topics
+    and services, so a client that finds one is answered without a compile's delay; after
+    a runtime change it runs in the reconfiguration's worker while the old scene ticks on.
 
     Parameters
     ----------
     world : rigid_sim.core.world.World
         The world about to be stepped; left as it was.
-    integrator : str
-        Its integrator's name, for the log line.
+    name : str
+        The integrator's name, for the log lines.
     logger : rclpy.impl.rcutils_logger.RcutilsLogger
         Where the lines go (info level).
+    integrator : rigid_sim.core.integrators.base.Integrator or None
+        The method to compile for, when not the world's own.
 
     Returns
     -------
     int
         Kernel specialisations compiled (0: all were loaded or already compiled).
     """
-    seconds, compiled = warm_up_reporting(world, lambda: logger.info(
-        f'compiling the {integrator} kernels for this scene (first start; cached '
-        'afterwards) ...'))
+    effects = ', '.join(type(effect).__name__.lower() for effect in world.effects) or 'none'
+    seconds, compiled = warm_up_reporting(
+        world, lambda: logger.info(
+            f'compiling the {name} kernels for {world.bodies.count} bodies with effects '
+            f'[{effects}]: not in the kernel cache {numba_config.CACHE_DIR} (they are cached '
+            'for the next start) ...'),
+        lambda count, elapsed: logger.info(
+            f'... still compiling: {count} kernels in {elapsed:.0f} s'),
+        integrator)
     if compiled:
         logger.info(f'compiled {compiled} kernels in {seconds:.1f} s')
     return compiled
@@ -105,9 +113,8 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe(self.settings.start_paused))
         self._warn_on_frame_mismatch()
         # Before any topic or service exists: once a client discovers one, the node answers.
-        self._warm_up()
+        self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger())
         self.ticks = 0
-        self._pending = None       # validated parameter change awaiting the post-set callback
         self.qos_overrides = QosOverrides(self)
         self.clock = ClockOutput(self.qos_overrides)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
@@ -115,15 +122,15 @@ class RigidSimNode(Node):
                                     self.settings.per_body_topics_limit)
         self.imu_outputs = ImuOutputs(self, self.scene, self.world, self.settings.frame_prefix)
         self.inputs = BodyInputs(self, self.scene, self.settings.per_body_topics_limit)
-        self.loop = TickLoop(self, self.tick, self.settings.rate)
-        self.control = SimControl(self, self.settings.start_paused, reset=self.reset,
-                                  step=self.step, now=lambda: self.world.time,
-                                  paused_changed=self.loop.set_paused)
+        self.loop = TickLoop(self, self._tick, self.settings.rate)
+        self.control = SimControl(self, self.settings.start_paused, self.loop,
+                                  reset=self.reset, step_ticks=lambda: self.settings.step_ticks,
+                                  now=lambda: self.world.time)
+        self.control.before_step = self.refresh_listeners
         self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
         self.qos_overrides.finish_start()
-        self.add_on_set_parameters_callback(self._on_set_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.reconfiguration = Reconfiguration(self)
         self._warn_on_slow_ticks_for_imus()
 
     @property
@@ -175,14 +182,6 @@ class RigidSimNode(Node):
         """
         self._tick(advance=not self.paused)
 
-    def step(self):
-        """Advance ``step_ticks`` ticks whether paused or not, publishing each; their count."""
-        ticks = self.settings.step_ticks
-        self.refresh_listeners()
-        for _ in range(ticks):
-            self._tick(advance=True)
-        return ticks
-
     def _tick(self, advance):
         started = time.perf_counter()
         self.inputs.apply(self.world, self.scene, self.settings)
@@ -217,14 +216,15 @@ class RigidSimNode(Node):
         self.clock.refresh_listeners()
         self.outputs.refresh_listeners()
 
-    def publish_state(self):
-        """Publish every state output that has subscribers (pose, twist, odometry, ...)."""
-        self.outputs.publish(self.world)
-
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
+        loop = self.loop
+        due = not loop.stopped and loop.rate > 0.0
+        extra = {'last refused change': self.reconfiguration.last_refusal or 'none',
+                 'preparing a change': self.reconfiguration.preparing}
         self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals,
-                            self.loop.take_dropped())
+                            loop.take_dropped(),
+                            time.monotonic() - loop.last_tick if due else None, extra)
 
     def reset(self):
         """Back to the scene's initial state at time 0, dropping held and stored inputs."""
@@ -233,53 +233,51 @@ class RigidSimNode(Node):
         self.imu_outputs.restart()
         self.health.restart(self.world.time)
 
-    def _on_set_parameters(self, changes):
-        """Refuse a change with the reason, or keep it ready for :meth:`_apply_parameters`."""
-        try:
-            proposed = parameters.updated(self.settings, changes)
-            names = {change.name for change in changes}
-            self._pending = (proposed, self._prepare(proposed, 'scene' in names))
-        except (ValueError, OSError) as error:  # SceneError is a ValueError
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
+    def check_frames(self, settings):
+        """Raise ParameterError if ``settings.world_frame`` is a frame of the running scene."""
+        check_frames(self.scene, settings)
 
-    def _prepare(self, proposed, scene_set):
-        """Load the scene (set again: reload the file), or build a changed integrator."""
-        current = self.settings
-        if scene_set:
-            return load(proposed)
-        check_frames(self.scene, proposed)
-        if (proposed.integrator, proposed.tolerance) != (current.integrator, current.tolerance):
-            return make_integrator(proposed.integrator, self.world, proposed.tolerance)
-        return None
+    def prepare(self, settings, scene_changed):
+        """Build what ``settings`` need and compile its kernels (in the reconfiguration worker).
 
-    def _apply_parameters(self, changes):
-        proposed, prepared = self._pending
-        previous, self.settings = self.settings, proposed
+        Returns a new (scene, world) when ``scene_changed``, else an integrator for the
+        running world. Nothing the node runs is changed.
+        """
+        if scene_changed:
+            scene, world = load(settings)
+            warm_up(world, settings.integrator, self.get_logger())
+            return scene, world
+        integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
+        warm_up(self.world, settings.integrator, self.get_logger(), integrator)
+        return integrator
+
+    def swap(self, settings, prepared):
+        """Run what :meth:`prepare` made for ``settings``, between two ticks."""
+        previous = self.settings
+        self.settings = settings
         if isinstance(prepared, tuple):
+            self.check_frames(settings)
             self.scene, self.world = prepared
-            self._warm_up()
             self._wire_scene()
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
                                    'state, time 0, no wrench held')
         else:
-            if prepared is not None:
-                self.world.integrator = prepared
-                self._warm_up()
-            frames = (proposed.world_frame, proposed.frame_prefix)
-            if frames != (previous.world_frame, previous.frame_prefix):
-                self.outputs.set_frame(self.scene, *frames)
-                self.imu_outputs.set_frame_prefix(proposed.frame_prefix)
-        if proposed.rate != previous.rate:
-            self.loop.set_rate(proposed.rate)
+            self.world.integrator = prepared
+        self.apply(previous)
+
+    def apply(self, previous):
+        """Act on the change of the settings from ``previous`` to the running ones."""
+        settings = self.settings
+        frames = (settings.world_frame, settings.frame_prefix)
+        if frames != (previous.world_frame, previous.frame_prefix):
+            self.outputs.set_frame(self.scene, *frames)
+            self.imu_outputs.set_frame_prefix(settings.frame_prefix)
+        if settings.rate != previous.rate:
+            self.loop.set_rate(settings.rate)
         self.get_logger().info(self._describe(self.paused))
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
-
-    def _warm_up(self):
-        """Warm up the current world; see :func:`warm_up` (this blocks the executor)."""
-        self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger())
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""

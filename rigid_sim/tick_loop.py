@@ -11,17 +11,41 @@ and reported on /diagnostics: a simulation that cannot keep up says so instead o
 the executor with an ever longer backlog.
 
 With ``rate`` 0 there is no wall-clock schedule: a zero-period timer ticks on every round
-of the executor, in slices of at most ``SLICE`` seconds of wall time so that input messages
-and service calls are served between slices. While paused the loop then stands still (there
-is nothing to catch up and nothing new to publish); ``~/step`` still advances it.
+of the executor. While paused the loop then stands still (there is nothing to catch up and
+nothing new to publish); ``~/step`` still advances it.
+
+Control apart from the work: one timer callback ticks for at most ``SLICE`` seconds of wall
+time (and at least one tick), then returns to the executor, which answers services,
+parameter calls and signals before the next slice. A catch-up, the ticks of a multi-tick
+:class:`StepJob` and ticking at rate 0 all run in such slices.
 """
+from collections import deque
 import math
 from time import monotonic, perf_counter
 
 from rclpy.clock import Clock, ClockType
 
 MAX_LAG = 0.1    # s of wall time the simulation may fall behind before ticks are given up
-SLICE = 1.0e-3   # s of wall time of ticks between two executor rounds at rate 0
+# s of wall time of ticks in one executor round: control is answered between two slices,
+# so this (plus one tick) bounds its latency, well under the 100 ms the node promises.
+SLICE = 0.02
+
+
+class StepJob:
+    """Ticks asked for by one ``~/step`` call, run in slices; ``done(ran, why)`` at the end.
+
+    ``why`` is '' when every tick ran, else what ended the job early.
+    """
+
+    def __init__(self, ticks, done):
+        self.left = ticks
+        self.ran = 0
+        self._done = done
+
+    def finish(self, why=''):
+        """End the job: report the ticks it ran."""
+        self.left = 0
+        self._done(self.ran, why)
 
 
 class TickLoop:
@@ -30,9 +54,9 @@ class TickLoop:
     Parameters
     ----------
     node : rclpy.node.Node
-        Owns the timer.
+        Owns the timers.
     tick : callable
-        One tick of the simulation.
+        ``tick(advance)``: one tick of the simulation; ``advance`` False while paused.
     rate : float
         Ticks per second of wall time, Hz; 0 ticks as fast as the CPU allows.
     """
@@ -43,11 +67,15 @@ class TickLoop:
         self.paused = False
         self.stopped = False    # stopped for good: someone else calls the tick
         self.dropped = 0        # ticks given up behind wall time since the last report
+        self.last_tick = monotonic()   # wall time of the latest tick, for /diagnostics
+        self.jobs = deque()     # StepJobs, run in order, each to its end
         self._origin = 0.0      # wall time (monotonic) at which tick 0 was due
         self._done = 0          # ticks run since the origin
         # STEADY_TIME: never sim time, which this loop makes.
-        self.timer = node.create_timer(self._period(rate), self._on_timer,
-                                       clock=Clock(clock_type=ClockType.STEADY_TIME))
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.timer = node.create_timer(self._period(rate), self._on_timer, clock=steady)
+        self._job_timer = node.create_timer(0.0, self._on_job_timer, clock=steady)
+        self._job_timer.cancel()
         self._restart()
 
     @staticmethod
@@ -59,9 +87,14 @@ class TickLoop:
         self._done = 0
 
     def set_rate(self, rate):
-        """Tick ``rate`` times per second (0: as fast as possible) from now on."""
+        """Tick ``rate`` times per second (0: as fast as possible), the first a period from now.
+
+        The timer is reset too: a changed period alone would wait out the old one first.
+        """
         self.rate = rate
         self.timer.timer_period_ns = round(1e9 * self._period(rate))
+        if not self.stopped:
+            self.timer.reset()
         self._restart()
         self.set_paused(self.paused)
 
@@ -77,31 +110,71 @@ class TickLoop:
             self._restart()
 
     def stop(self):
-        """Tick no more (tests and embedding code then call the tick themselves)."""
+        """Tick no more on the wall clock (tests and embedding code then tick themselves).
+
+        Step jobs still run, in slices, when the executor spins.
+        """
         self.stopped = True
         self.timer.cancel()
+
+    def run_job(self, job):
+        """Queue ``job``; its ticks run in slices after those of the jobs before it."""
+        self.jobs.append(job)
+        self._job_timer.reset()
+
+    def end_jobs(self, why):
+        """End the running job after its current tick, and every queued one, saying ``why``."""
+        while self.jobs:
+            self.jobs.popleft().finish(why)
+        self._job_timer.cancel()
 
     def take_dropped(self):
         """Ticks given up since the last call, and start counting again."""
         dropped, self.dropped = self.dropped, 0
         return dropped
 
+    def _run(self, advance):
+        self._tick(advance)
+        self.last_tick = monotonic()
+
     def _on_timer(self):
-        if self.rate == 0.0:
-            self._run_slice()
+        if self.jobs:   # a step job ticks the world; the schedule starts again after it
+            self._restart()
             return
+        if self.rate == 0.0:
+            end = perf_counter() + SLICE
+            self._run(not self.paused)
+            while perf_counter() < end:
+                self._run(not self.paused)
+            return
+        self._catch_up()
+
+    def _catch_up(self):
         now = monotonic()
         owed = math.floor((now - self._origin) * self.rate) + 1 - self._done
         bound = max(1, math.ceil(MAX_LAG * self.rate))
         if owed > bound:
             self.dropped += owed - 1
             self._origin, self._done, owed = now, 0, 1
-        for _ in range(owed):
-            self._tick()
-        self._done += max(owed, 0)
-
-    def _run_slice(self):
         end = perf_counter() + SLICE
-        self._tick()
-        while perf_counter() < end:
-            self._tick()
+        for ran in range(1, owed + 1):   # the rest, if any, at the next wake-up
+            self._run(not self.paused)
+            self._done += 1
+            if perf_counter() > end and ran < owed:
+                return
+
+    def _on_job_timer(self):
+        end = perf_counter() + SLICE
+        while self.jobs:
+            job = self.jobs[0]
+            while job.left > 0:
+                self._run(True)
+                job.left -= 1
+                job.ran += 1
+                if perf_counter() > end:
+                    break
+            if job.left == 0:
+                self.jobs.popleft().finish()
+            if perf_counter() > end:
+                return
+        self._job_timer.cancel()

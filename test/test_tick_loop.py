@@ -30,21 +30,26 @@ class FakeTimer:
     def __init__(self, callback):
         self.callback = callback
         self.canceled = False
+        self.resets = 0
 
     def cancel(self):
         self.canceled = True
 
     def reset(self):
         self.canceled = False
+        self.resets += 1
 
     def is_canceled(self):
         return self.canceled
 
 
 class FakeNode:
+    def __init__(self):
+        self.timers = []
+
     def create_timer(self, period, callback, clock):
-        self.timer = FakeTimer(callback)
-        return self.timer
+        self.timers.append(FakeTimer(callback))
+        return self.timers[-1]
 
 
 @pytest.fixture
@@ -54,11 +59,12 @@ def clock(monkeypatch):
     return fake
 
 
-def make_loop(rate=RATE):
+def make_loop(rate=RATE, tick=None):
+    """The loop, its wall timer's callback, and the ticks run (whether each advanced)."""
     ticks = []
     node = FakeNode()
-    loop = TickLoop(node, lambda: ticks.append(None), rate)
-    return loop, node.timer.callback, ticks
+    loop = TickLoop(node, tick or ticks.append, rate)
+    return loop, node.timers[0].callback, ticks
 
 
 def test_late_wake_ups_are_caught_up_so_ticks_follow_wall_time(clock):
@@ -142,3 +148,81 @@ def test_rate_changes_switch_between_the_wall_schedule_and_as_fast_as_possible(c
     clock.now += 0.02
     wake()
     assert len(ticks) == before + 1
+
+
+def test_a_rate_change_takes_effect_within_one_period_of_the_new_rate(clock):
+    """1 mHz, then 100 Hz: the timer is reset, so its old 1000 s period is not waited out."""
+    loop, wake, ticks = make_loop(rate=0.001)
+    clock.now += 0.3
+    loop.set_rate(100.0)
+    assert loop.timer.resets == 1 and loop.timer.timer_period_ns == 10_000_000
+    clock.now += 0.01
+    wake()
+    assert len(ticks) == 1
+
+
+class SlowTicks:
+    """A tick that takes ``cost`` seconds of the (fake) clock that slices are measured on."""
+
+    def __init__(self, clock, cost):
+        self.clock, self.cost, self.ticks = clock, cost, []
+
+    def __call__(self, advance):
+        self.ticks.append(advance)
+        self.clock.now += self.cost
+
+
+@pytest.fixture
+def slice_clock(monkeypatch, clock):
+    """The fake clock also drives the slices' perf_counter."""
+    monkeypatch.setattr(tick_loop, 'perf_counter', clock)
+    return clock
+
+
+def test_a_catch_up_returns_to_the_executor_after_one_slice(slice_clock):
+    """Owed ticks of 5 ms each: one wake-up runs a slice's worth, the next the rest.
+
+    Between the two, the executor serves control: it never waits for more than one slice
+    plus one tick.
+    """
+    slow = SlowTicks(slice_clock, 0.005)
+    loop, wake, _ = make_loop(rate=RATE, tick=slow)
+    slice_clock.now += 0.05   # 50 ticks owed, under the lag bound
+    wake()
+    per_slice = len(slow.ticks)
+    assert 1 <= per_slice <= round(tick_loop.SLICE / 0.005) + 1 < 50
+    wake()
+    assert len(slow.ticks) > per_slice   # the rest of the catch-up follows
+
+
+def test_a_step_job_runs_in_slices_and_is_answered_when_done(slice_clock):
+    """A 100-tick job of 1 ms ticks: slices of SLICE seconds, then one answer with 100."""
+    slow = SlowTicks(slice_clock, 0.001)
+    node = FakeNode()
+    loop = TickLoop(node, slow, rate=0.0)
+    loop.set_paused(True)
+    answers = []
+    loop.run_job(tick_loop.StepJob(100, lambda ran, why: answers.append((ran, why))))
+    job_timer = node.timers[1]
+    rounds = 0
+    while not job_timer.canceled:
+        job_timer.callback()
+        rounds += 1
+    assert answers == [(100, '')] and all(slow.ticks) and len(slow.ticks) == 100
+    assert rounds == math.ceil(100 / round(tick_loop.SLICE / 0.001))
+
+
+def test_pause_ends_a_step_job_after_its_current_tick_saying_how_many_ran(slice_clock):
+    """Ending the jobs between two slices answers each with the ticks it ran and why."""
+    slow = SlowTicks(slice_clock, 0.001)
+    node = FakeNode()
+    loop = TickLoop(node, slow, rate=0.0)
+    answers = []
+    for ticks in (1000, 5):
+        loop.run_job(tick_loop.StepJob(ticks, lambda ran, why: answers.append((ran, why))))
+    node.timers[1].callback()
+    loop.end_jobs('ended by ~/pause')
+    ran = len(slow.ticks)
+    assert 0 < ran < 1000
+    assert answers == [(ran, 'ended by ~/pause'), (0, 'ended by ~/pause')]
+    assert node.timers[1].canceled

@@ -19,16 +19,20 @@ from rigid_sim.core.integrators import make_integrator
 
 # A probe step this short changes no state anyone sees: it runs on a copy.
 PROBE_STEP = 1e-6   # s
+# s of wall time between two progress reports of a long compilation
+PROGRESS_PERIOD = 2.0
 
 
-def warm_up(world):
+def warm_up(world, integrator=None):
     """Compile or load every kernel ``world.step`` and its outputs use; seconds it took.
 
-    The probe steps a copy of the state with a fresh integrator of the same kind, so the
-    world, its integrator's counters and its diagnostics are left as they were.
+    ``integrator`` (default: the world's) is the method whose kernels are wanted. The probe
+    steps a copy of the state with a fresh integrator of the same kind, so the world, its
+    integrator's counters and its diagnostics are left as they were.
     """
     start = time.perf_counter()
-    integrator = make_integrator(world.integrator.name, world, world.integrator.tolerance)
+    integrator = integrator or world.integrator
+    integrator = make_integrator(integrator.name, world, integrator.tolerance)
     probe = world.y.copy()
     with np.errstate(all='ignore'):
         integrator.advance(probe, world.time, PROBE_STEP, 1)
@@ -48,23 +52,33 @@ class Compilations(event.Listener):
     ----------
     on_first : callable or None
         Called with no argument as the first compilation starts.
+    on_progress : callable or None
+        ``on_progress(count, seconds)``, at most once every ``PROGRESS_PERIOD`` seconds while
+        compilations go on: kernels compiled so far and seconds since the first started.
     """
 
-    def __init__(self, on_first=None):
+    def __init__(self, on_first=None, on_progress=None):
         self.count = 0
-        self._on_first = on_first
+        self._on_first, self._on_progress = on_first, on_progress
+        self._started = self._reported = 0.0
 
     def on_start(self, event):
         """Count one compilation; announce the first."""
         self.count += 1
-        if self.count == 1 and self._on_first is not None:
-            self._on_first()
+        if self.count == 1:
+            self._started = self._reported = time.perf_counter()
+            if self._on_first is not None:
+                self._on_first()
 
     def on_end(self, event):
-        """Nothing to do when a compilation ends."""
+        """Report progress if the last report is ``PROGRESS_PERIOD`` old."""
+        now = time.perf_counter()
+        if self._on_progress is not None and now - self._reported >= PROGRESS_PERIOD:
+            self._reported = now
+            self._on_progress(self.count, now - self._started)
 
 
-def warm_up_reporting(world, on_first_compile=None):
+def warm_up_reporting(world, on_first_compile=None, on_progress=None, integrator=None):
     """Run :func:`warm_up`, calling ``on_first_compile`` if a kernel has to be compiled.
 
     Parameters
@@ -74,6 +88,10 @@ def warm_up_reporting(world, on_first_compile=None):
     on_first_compile : callable or None
         Called with no argument just before the first compilation, not at all when every
         kernel is already in memory or loaded from the disk cache.
+    on_progress : callable or None
+        See :class:`Compilations`.
+    integrator : Integrator or None
+        See :func:`warm_up`.
 
     Returns
     -------
@@ -82,7 +100,7 @@ def warm_up_reporting(world, on_first_compile=None):
     compiled : int
         Number of kernel specialisations compiled (0: all were compiled or cached before).
     """
-    compilations = Compilations(on_first_compile)
+    compilations = Compilations(on_first_compile, on_progress)
     with event.install_listener('numba:compile', compilations):
-        seconds = warm_up(world)
+        seconds = warm_up(world, integrator)
     return seconds, compilations.count
