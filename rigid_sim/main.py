@@ -21,9 +21,6 @@ import sys
 # Only the standard library above: the handlers are installed before the heavy imports
 # (rclpy, numba, scipy: about a second), so a signal in the first milliseconds is not lost.
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
-# s; the executor waits at most this long for work, so a signal that arrives while it
-# waits (a slow rate, a paused loop) is acted on within this time.
-SIGNAL_LATENCY = 0.05
 
 
 class _Stopper:
@@ -37,6 +34,12 @@ class _Stopper:
         self.requested = True
         if not self.spinning:
             _end_process(0)
+
+
+def ignore_stop_signals():
+    """Ignore SIGINT and SIGTERM from now on (the node is on its way out)."""
+    for number in STOP_SIGNALS:
+        signal.signal(number, signal.SIG_IGN)
 
 
 def _end_process(status):
@@ -55,42 +58,14 @@ def main(args=None):
         signal.signal(number, stopper)
     import rclpy
     from rclpy.signals import SignalHandlerOptions
+
+    from rigid_sim import spin
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-        return _run(stopper)
+        return spin.run(stopper)
     finally:
-        for number in STOP_SIGNALS:   # a second Ctrl-C must not break the clean-up
-            signal.signal(number, signal.SIG_IGN)
+        ignore_stop_signals()   # a second Ctrl-C must not break the clean-up
         rclpy.try_shutdown()
-
-
-def _run(stopper):
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    from rigid_sim.core.scene import SceneError
-    from rigid_sim.executor import freeze_long_lived_objects, make_executor
-    from rigid_sim.node import NODE_NAME, RigidSimNode
-    from rigid_sim.parameters import ParameterError
-    try:
-        node = RigidSimNode()
-    except (ParameterError, SceneError, FileNotFoundError) as error:
-        rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
-        return 1
-    freeze_long_lived_objects()   # no full garbage collection stalls a tick from here on
-    executor = make_executor()
-    executor.add_node(node)
-    stopper.spinning = True
-    try:
-        while not stopper.requested:
-            executor.spin_once(timeout_sec=SIGNAL_LATENCY)
-    except ExternalShutdownException:
-        pass
-    for number in STOP_SIGNALS:
-        signal.signal(number, signal.SIG_IGN)
-    executor.shutdown(timeout_sec=0)
-    node.destroy_node()
-    return 0
 
 
 def executable():

@@ -218,13 +218,10 @@ class RigidSimNode(Node):
 
     def publish_diagnostics(self):
         """Publish step time, real-time factor, energy, momenta and refused-input counts."""
-        loop = self.loop
-        due = not loop.stopped and loop.rate > 0.0
         extra = {'last refused change': self.reconfiguration.last_refusal or 'none',
                  'preparing a change': self.reconfiguration.preparing}
         self.health.publish(self.world, self.settings, self.paused, self.inputs.refusals,
-                            loop.take_dropped(),
-                            time.monotonic() - loop.last_tick if due else None, extra)
+                            self.loop.take_dropped(), self.loop.since_last_tick(), extra)
 
     def reset(self):
         """Back to the scene's initial state at time 0, dropping held and stored inputs."""
@@ -275,6 +272,8 @@ class RigidSimNode(Node):
             self.imu_outputs.set_frame_prefix(settings.frame_prefix)
         if settings.rate != previous.rate:
             self.loop.set_rate(settings.rate)
+        if settings == previous:
+            return
         self.get_logger().info(self._describe(self.paused))
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()

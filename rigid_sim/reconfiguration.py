@@ -145,14 +145,14 @@ class Reconfiguration:
     def _refuse(self, done):
         what = 'scene ' + shown(done.settings.scene) if done.scene_changed else (
             f'integrator {done.settings.integrator} (tolerance {done.settings.tolerance:g})')
-        self.last_refusal = f'{what}: {shown(str(done.error))}'
+        self.last_refusal = f'{what}: {done.error}'  # the loader cuts what it quotes
         running = self._node.settings
         self._node.get_logger().error(
             f'refused {self.last_refusal}; still running {shown(running.scene)} with '
             f'{running.integrator}, parameters set back')
         self._reverting = True
         try:
-            self._node.set_parameters([Parameter(name, value=getattr(running, name))
-                                       for name in HEAVY])
+            self._node.set_parameters_atomically(
+                [Parameter(name, value=getattr(running, name)) for name in HEAVY])
         finally:
             self._reverting = False

@@ -128,6 +128,12 @@ class TickLoop:
             self.jobs.popleft().finish(why)
         self._job_timer.cancel()
 
+    def since_last_tick(self):
+        """Seconds of wall time since the latest tick; None where none is due on the clock."""
+        if self.stopped or self.rate == 0.0:
+            return None
+        return monotonic() - self.last_tick
+
     def take_dropped(self):
         """Ticks given up since the last call, and start counting again."""
         dropped, self.dropped = self.dropped, 0
@@ -165,16 +171,13 @@ class TickLoop:
 
     def _on_job_timer(self):
         end = perf_counter() + SLICE
-        while self.jobs:
+        while self.jobs and perf_counter() <= end:
             job = self.jobs[0]
-            while job.left > 0:
+            while job.left > 0 and perf_counter() <= end:
                 self._run(True)
                 job.left -= 1
                 job.ran += 1
-                if perf_counter() > end:
-                    break
             if job.left == 0:
                 self.jobs.popleft().finish()
-            if perf_counter() > end:
-                return
-        self._job_timer.cancel()
+        if not self.jobs:
+            self._job_timer.cancel()

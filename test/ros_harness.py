@@ -33,6 +33,10 @@ def spin_until(executor, condition, timeout=TIMEOUT, what='condition'):
         executor.spin_once(timeout_sec=0.05)
 
 
+# s of wall time a scene or integrator change may take to prepare (compiling included)
+PREPARATION_TIMEOUT = 600.0
+
+
 class SimHarness:
     """The node under test (``sim``), a ``probe`` node, and what the probe received.
 
@@ -176,9 +180,15 @@ class SimHarness:
         return future.result()
 
     def set_parameters(self, **values):
-        """Set the node's parameters as ``ros2 param set`` would; the SetParametersResults."""
-        return self.sim.set_parameters([Parameter(name, value=value)
-                                        for name, value in values.items()])
+        """Set the node's parameters as ``ros2 param set`` would; the SetParametersResults.
+
+        A change that needs preparing (scene, integrator) is then swapped in or refused
+        before this returns, as a waiting client would see it.
+        """
+        results = self.sim.set_parameters([Parameter(name, value=value)
+                                           for name, value in values.items()])
+        assert self.sim.reconfiguration.wait(PREPARATION_TIMEOUT), 'preparation timed out'
+        return results
 
     def diagnostics(self):
         """Have the node publish /diagnostics now; return the received key -> text values."""

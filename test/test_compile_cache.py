@@ -6,6 +6,7 @@ from pathlib import Path
 import shutil
 import subprocess
 import sys
+from types import SimpleNamespace
 
 from numba import njit
 from numba.core import event
@@ -138,12 +139,15 @@ def test_compilations_are_counted_and_the_first_announced_before_it_runs():
 def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     """The node's warm-up logs before and after a compilation, and nothing without one."""
     logger = RecordingLogger()
-    monkeypatch.setattr('rigid_sim.core.warm_up.warm_up', lambda world: _fresh_kernel(1.5))
-    assert node_warm_up(None, 'rk4', logger) == 1
+    monkeypatch.setattr('rigid_sim.core.warm_up.warm_up',
+                        lambda world, integrator: _fresh_kernel(1.5))
+    world = SimpleNamespace(effects=[], bodies=SimpleNamespace(count=1))
+    assert node_warm_up(world, 'rk4', logger) == 1
     assert len(logger.lines) == 2
-    assert logger.lines[0].startswith('compiling the rk4 kernels for this scene')
+    assert logger.lines[0].startswith('compiling the rk4 kernels for 1 bodies with effects '
+                                      '[none]: not in the kernel cache ')
     assert logger.lines[1].startswith('compiled 1 kernels in ')
-    assert node_warm_up(None, 'rk4', logger) == 0
+    assert node_warm_up(world, 'rk4', logger) == 0
     assert len(logger.lines) == 2
 
 

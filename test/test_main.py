@@ -12,6 +12,7 @@ import signal
 import weakref
 
 from rigid_sim import main as entry
+from rigid_sim import spin
 from rigid_sim.executor import freeze_long_lived_objects
 
 
@@ -46,13 +47,13 @@ def test_objects_alive_before_the_first_spin_are_frozen(monkeypatch):
     assert any(o is started for o in gc.get_objects(generation=2))
     stopper = entry._Stopper()
     executor = _RecordingExecutor(stopper, started)
-    monkeypatch.setattr(entry, 'RigidSimNode', _StandInNode)
-    monkeypatch.setattr(entry, 'make_executor', lambda: executor)
+    monkeypatch.setattr(spin, 'RigidSimNode', _StandInNode)
+    monkeypatch.setattr(spin, 'make_executor', lambda: executor)
     handlers = {number: signal.getsignal(number) for number in entry.STOP_SIGNALS}
     try:
-        assert entry._run(stopper) == 0
+        assert spin.run(stopper) == 0
     finally:
-        for number, handler in handlers.items():   # _run ignores them on its way out
+        for number, handler in handlers.items():   # run ignores them on its way out
             signal.signal(number, handler)
         gc.unfreeze()
     frozen, walked = executor.seen

@@ -147,10 +147,11 @@ def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_
     integrator, = sim.set_parameters(integrator='leapfrog')
     assert not integrator.successful and 'rk4' in integrator.reason
     malformed = write_scene(MALFORMED_SCENE, 'malformed.yaml')
-    scene, = sim.set_parameters(scene=malformed)
-    assert not scene.successful
-    assert malformed in scene.reason and 'bodies[0].shape.size' in scene.reason
-    assert 'list of 3 numbers' in scene.reason
+    assert sim.set_parameters(scene=malformed)[0].successful   # loaded beside, then refused
+    refusal = sim.diagnostics()['last refused change']
+    assert malformed in refusal and 'bodies[0].shape.size' in refusal
+    assert 'list of 3 numbers' in refusal
+    assert sim.sim.get_parameter('scene').value == before.scene   # set back
     frame, = sim.set_parameters(world_frame='box')
     assert not frame.successful and "is a frame of body 'box'" in frame.reason
     assert sim.sim.settings == before and sim.sim.get_parameter('rate').value == before.rate
@@ -236,8 +237,10 @@ def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
                          (str(tmp_path / 'latin1.yaml'), 'not UTF-8'),
                          (str(fifo), 'not a regular file'), ('/dev/zero', 'not a regular'),
                          (str(tmp_path), 'not a regular file')]:
-        result, = sim.set_parameters(scene=path)
-        assert not result.successful and path in result.reason and reason in result.reason
+        assert sim.set_parameters(scene=path)[0].successful   # loaded beside, then refused
+        refusal = sim.sim.reconfiguration.last_refusal
+        assert path in refusal and reason in refusal, refusal
+        assert sim.sim.get_parameter('scene').value == sim.sim.settings.scene != path
     sim.tick(8)
     position, _, velocity, _, t = sim.state('box')
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0

@@ -60,7 +60,7 @@ def clock(monkeypatch):
 
 
 def make_loop(rate=RATE, tick=None):
-    """The loop, its wall timer's callback, and the ticks run (whether each advanced)."""
+    """Return the loop, its wall timer's callback, and the ticks run (each one's advance)."""
     ticks = []
     node = FakeNode()
     loop = TickLoop(node, tick or ticks.append, rate)
@@ -174,7 +174,7 @@ class SlowTicks:
 
 @pytest.fixture
 def slice_clock(monkeypatch, clock):
-    """The fake clock also drives the slices' perf_counter."""
+    """Let the fake clock drive the slices' perf_counter too."""
     monkeypatch.setattr(tick_loop, 'perf_counter', clock)
     return clock
 
