@@ -100,3 +100,13 @@ def test_mujoco_runs_the_torqued_cases_as_specified():
         assert fine.error(kind) < 1e-9, (key, fine)
         assert 3e3 < coarse.error(kind) / fine.error(kind) < 3e4, (key, fine, coarse)
         assert fine.energy_drift < 1e-9, (key, fine)
+
+
+def test_the_benchmark_help_needs_none_of_the_bench_extra():
+    """``rigid_sim_bench --help`` after the README's run command, which installs no tqdm."""
+    import subprocess
+    import sys
+    hide = ("import sys; sys.modules.update(tqdm=None, matplotlib=None, mujoco=None); "
+            "from rigid_sim.bench import cli; cli.main(['--help'])")
+    done = subprocess.run([sys.executable, '-c', hide], capture_output=True, text=True)
+    assert done.returncode == 0 and 'throughput' in done.stdout, done.stderr

@@ -15,7 +15,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from rigid_sim import bench
 from rigid_sim.bench.cases import CASES, CASES_BY_KEY, score
@@ -93,6 +92,10 @@ def sweep(jobs, options):
     ``options``: ``repeats``, ``budget`` (s), ``tolerances``, ``progress`` (bool).
     """
     grids = [options['tolerances'] if adaptive else case.steps for case, _, _, adaptive in jobs]
+    try:   # the 'bench' extra; imported here so that rigid_sim_bench --help needs none
+        from tqdm import tqdm
+    except ImportError:
+        raise bench.MissingPackage("a progress bar needs tqdm: pip install -e '.[bench]'")
     bar = tqdm(total=sum(map(len, grids)), disable=not options['progress'], file=sys.stderr,
                unit='setting')
     results, skipped = [], []

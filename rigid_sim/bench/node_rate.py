@@ -29,6 +29,7 @@ from rclpy.parameter import Parameter
 
 import rigid_sim
 from rigid_sim import bench
+from rigid_sim.bench import control_latency
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.executor import freeze_long_lived_objects, make_executor
 from rigid_sim.node import RigidSimNode
@@ -62,7 +63,7 @@ CONFIGS = (Config(2, 100.0, 1e-2, 1, 100.0, 'nothing', DEFAULT_SCENE),
 QUICK = dict(configs=(Config(1, 1000.0, 1e-3, 1, 100.0, 'bodies'),
                       Config(10, 100.0, 1e-2, 10, 100.0, 'poses'),
                       Config(2, 100.0, 1e-2, 1, 100.0, 'clock', DEFAULT_SCENE)),
-             duration=0.5, warmup=0.3, start_sizes=(10,))
+             duration=0.5, warmup=0.3, start_sizes=(10,), control=False)
 # Scenes (N bodies, every one taking wrenches) the executable is started and stopped on.
 START_SIZES = (1000, 10_000)
 START_TIMEOUT = 120.0   # s
@@ -80,11 +81,11 @@ class TimedNode(RigidSimNode):
 
     def __init__(self, **kwargs):
         self.tick_seconds = []
-        super().__init__(**kwargs)   # its timer calls self.tick: the method below
+        super().__init__(**kwargs)   # its tick loop calls self._tick: the method below
 
-    def tick(self):
+    def _tick(self, advance):
         started = time.perf_counter()
-        super().tick()
+        super()._tick(advance)
         self.tick_seconds.append(time.perf_counter() - started)
 
 
@@ -326,7 +327,7 @@ def default_scene_goals(results):
     return lines
 
 
-def report(results, seconds, starts=()):
+def report(results, seconds, starts=(), control=()):
     """Return the Markdown section: how it was measured, the tables, the goals."""
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]   # this benchmark times wall clock
@@ -361,7 +362,16 @@ def report(results, seconds, starts=()):
         'wall-clock timer '
         'cannot average above 1, and window edges move it by ~1e-3; only rows whose '
         f'integrator steps are <= {1e3 * GOAL_PHYSICS_STEP:g} ms count as 1 kHz physics)',
-        *goals(results)])
+        *goals(results), *control_section(control)])
+
+
+def control_section(rows):
+    """The control-latency section, when it was measured."""
+    if not rows:
+        return []
+    return ['', '### Control latency while the node works (promise: answers within 100 ms, '
+                'a stop within 0.5 s)', control_latency.__doc__.split('\n\n')[1].replace(
+                    '\n', ' '), '', *control_latency.table(rows)]
 
 
 def add_arguments(parser):
@@ -374,6 +384,8 @@ def add_arguments(parser):
                              f'(default {DEFAULT_INTEGRATOR})')
     parser.add_argument('--duration', type=float, help=f'timed s per row (default {DURATION})')
     parser.add_argument('--warmup', type=float, help=f'warm-up s per row (default {WARMUP})')
+    parser.add_argument('--no-control', dest='control', action='store_false',
+                        help='skip the control-latency rows (not run with --quick either)')
     parser.add_argument('--out', type=Path, help='Markdown file whose section is (re)written')
 
 
@@ -407,7 +419,12 @@ def main(args):
             scene.write_text(scene_text(n, wrench_input=True))
             starts.append((n, start_and_stop(str(scene), log_dir)))
             print(f'start and stop at N = {n}: {starts[-1][1]}', file=sys.stderr)
-    text = report(results, seconds, starts)
+        control = []
+        if chosen.get('control', True) and args.control:
+            scene = Path(log_dir, 'boxes_1000.yaml')
+            scene.write_text(scene_text(1000))
+            control = control_latency.measure(str(scene), log_dir)
+    text = report(results, seconds, starts, control)
     print(text)
     if args.out is not None:
         bench.write_section(args.out, SECTION, text)
