@@ -17,6 +17,7 @@ from rclpy.node import Node
 from rigid_sim import parameters
 from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
+from rigid_sim.core.compile_cache import caching_note
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.core.warm_up import warm_up_reporting
@@ -38,7 +39,7 @@ def load(settings):
     Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
     the scene.
     """
-    scene = load_scene(find_scene(settings.scene))
+    scene = load_scene(find_scene(settings.scene), **settings.resource_limits)
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
@@ -68,8 +69,7 @@ def warm_up(world, integrator, logger):
         Kernel specialisations compiled (0: all were loaded or already compiled).
     """
     seconds, compiled = warm_up_reporting(world, lambda: logger.info(
-        f'compiling the {integrator} kernels for this scene (first start; cached '
-        'afterwards) ...'))
+        f'compiling the {integrator} kernels for this scene ({caching_note()}) ...'))
     if compiled:
         logger.info(f'compiled {compiled} kernels in {seconds:.1f} s')
     return compiled
