@@ -80,7 +80,7 @@ class Settings:
 
     @property
     def resource_limits(self):
-        """The operator's limits, as :func:`rigid_sim.core.scene.load_scene` takes them."""
+        """Return the operator's limits, as :func:`rigid_sim.core.scene.load_scene` takes them."""
         return {name: getattr(self, name) for name in RESOURCE_LIMITS}
 
     @property

@@ -196,7 +196,7 @@ def run_two_kernels(environment):
 
 
 def own_cache(tmp_path):
-    """An environment whose kernel cache is a new directory under ``tmp_path``; its files."""
+    """Return an environment whose kernel cache is new, under ``tmp_path``, and its directory."""
     environment = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / 'cache'))
     return environment, tmp_path / 'cache' / 'rigid_sim' / 'numba' / compile_cache.source_key()
 
@@ -252,8 +252,10 @@ def test_an_unusable_cache_directory_caches_nothing_and_says_so_once(tmp_path):
 
 
 def test_a_node_stopped_while_compiling_without_a_cache_leaves_no_files(tmp_path):
-    """The node's compile line says the kernels will not be cached, and why; SIGTERM then
-    ends it with status 0 leaving nothing in its temporary directory.
+    """Without a usable cache the node says it will not cache; SIGTERM leaves nothing behind.
+
+    Its compile line says why the kernels are not cached; a SIGTERM as it compiles ends it
+    with status 0 and nothing in its temporary directory.
     """
     blocker = tmp_path / 'a_file'
     blocker.write_text('')

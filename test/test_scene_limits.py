@@ -171,7 +171,7 @@ def test_samples_are_refused_before_they_are_drawn(tmp_path):
 
 
 def test_body_count_is_bounded_and_only_the_operator_raises_it(tmp_path):
-    """A scene may lower max_bodies; only the loader's argument (the node's parameter) raises it."""
+    """A scene may lower max_bodies; the loader's argument (the node's parameter) raises it."""
     path = tmp_path / 'bodies.yaml'
     bodies = ''.join(f'  - {BOX % (f"b{i}", "")}\n' for i in range(3))
     path.write_text('limits: {max_bodies: 2}\nbodies:\n' + bodies)
