@@ -216,7 +216,8 @@ def test_damaged_cache_files_are_warned_about_once_and_compiled_again(tmp_path):
     cached again, and the next process loads them without compiling.
     """
     environment, directory = own_cache(tmp_path)
-    assert run_two_kernels(environment)[0] == (2, 0, 'cached afterwards')
+    cached = f'cached afterwards in {directory}'
+    assert run_two_kernels(environment)[0] == (2, 0, cached)
     for damage, suffix in ((truncate, '.nbc'), (scribble, '.nbi')):
         damaged = [path for path in directory.rglob(f'*{suffix}')
                    if path.name.startswith(('kinematics.cross', 'kinematics.add'))]
@@ -224,9 +225,9 @@ def test_damaged_cache_files_are_warned_about_once_and_compiled_again(tmp_path):
         for path in damaged:
             damage(path)
         counts, errors = run_two_kernels(environment)
-        assert counts == (2, 2, 'cached afterwards'), errors
+        assert counts == (2, 2, cached), errors
         assert errors.count('damaged entries are deleted and compiled again') == 1, errors
-        assert run_two_kernels(environment) == ((0, 0, 'cached afterwards'), '')
+        assert run_two_kernels(environment) == ((0, 0, cached), '')
 
 
 def test_an_unusable_cache_directory_caches_nothing_and_says_so_once(tmp_path):
@@ -276,6 +277,8 @@ def test_a_node_stopped_while_compiling_without_a_cache_leaves_no_files(tmp_path
         if node.poll() is None:
             node.kill()
     assert node.returncode == 0, output
-    assert 'kernels for this scene (not cached: ' in lines[-1] and 'afterwards' not in output
+    assert f'not cached: {blocker}/rigid_sim/numba/' in lines[-1]
+    assert 'cannot be used (Not a directory)' in lines[-1], lines[-1]
+    assert 'afterwards' not in output and 'next start' not in output
     assert output.count('the compiled kernels will not be cached') == 1, output
     assert list(temporary.iterdir()) == []

@@ -183,5 +183,11 @@ def use_keyed_cache(environ=os.environ):
 
 
 def caching_note():
-    """Words for a log line about kernels being compiled now: cached afterwards, or why not."""
-    return 'cached afterwards' if STATE.problem is None else f'not cached: {STATE.problem}'
+    """Words for a log line about kernels being compiled now: where they are cached, or why not.
+
+    ``cached afterwards in <directory>``, or ``not cached: <directory> cannot be used
+    (<reason>)`` where this process caches nothing.
+    """
+    if STATE.problem is not None:
+        return f'not cached: {STATE.problem}'
+    return f'cached afterwards in {STATE.directory}'
