@@ -26,6 +26,7 @@ from rclpy.clock import Clock, ClockType
 from rigid_sim import conversions
 from rigid_sim.core.body_state import with_pose, with_twist
 from rigid_sim.core.scene import wrench_target
+from rigid_sim.core.text import shown
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
@@ -58,8 +59,8 @@ class Refusals:
 def _world_axes(message, topic, world_frame):
     """Raise ValueError unless a set_pose/set_twist ``message`` is in ``world_frame``."""
     if message.header.frame_id != world_frame:
-        raise ValueError(f'unknown frame_id {message.header.frame_id!r}: {topic} is given in '
-                         f'the world frame; valid: [{world_frame!r}]')
+        raise ValueError(f'unknown frame_id {shown(message.header.frame_id)}: {topic} is given '
+                         f'in the world frame; valid: [{world_frame!r}]')
 
 
 class BodyInputs:

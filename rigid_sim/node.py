@@ -11,12 +11,12 @@ world and publishes; tests call it directly for deterministic steps.
 """
 import time
 
-from numba.core import config as numba_config
 from rclpy.node import Node
 
 from rigid_sim import parameters
 from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
+from rigid_sim.core.compile_cache import caching_note
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.core.warm_up import warm_up_reporting
@@ -39,7 +39,7 @@ def load(settings):
     Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
     the scene.
     """
-    scene = load_scene(find_scene(settings.scene))
+    scene = load_scene(find_scene(settings.scene), **settings.resource_limits)
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
@@ -73,8 +73,7 @@ def warm_up(world, name, logger, integrator=None):
     seconds, compiled = warm_up_reporting(
         world, lambda: logger.info(
             f'compiling the {name} kernels for {world.bodies.count} bodies with effects '
-            f'[{effects}]: not in the kernel cache {numba_config.CACHE_DIR} (they are cached '
-            'for the next start) ...'),
+            f'[{effects}], not found in the kernel cache ({caching_note()}) ...'),
         lambda count, elapsed: logger.info(
             f'... still compiling: {count} kernels in {elapsed:.0f} s'),
         integrator)

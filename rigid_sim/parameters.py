@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
+from rigid_sim.core.scene_limits import RESOURCE_LIMITS
 from rigid_sim.core.text import shown
 from rigid_sim.resources import DEFAULT_SCENE
 
@@ -34,7 +35,13 @@ PER_BODY_TOPICS_LIMIT = 100
 MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
 # A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
 FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
+# A frame prefix: the same name tokens, each followed by '/' (the last '/' may be left out:
+# 'sim' makes 'simbox'), so that every prefixed frame is a frame name as well.
+FRAME_PREFIX = r'([A-Za-z_][A-Za-z0-9_]*/)*([A-Za-z_][A-Za-z0-9_]*)?'
 MAX_FRAME_NAME = 100
+# The operator's resource limits have no ceiling of their own (the operator raises them,
+# knowing the machine); this one is only what an int64 parameter and a float carry exactly.
+MAX_RESOURCE_LIMIT = 1 << 53
 MAX_STEP_TICKS = 10000  # one ~/step call blocks the executor for this many ticks at most
 # With rate 0 (no wall clock), time_step and publish_rate default to those of this rate.
 UNTIMED_DEFAULT_RATE = 100.0
@@ -64,6 +71,17 @@ class Settings:
     step_ticks: int        # ticks one ~/step call advances
     frame_prefix: str      # prefixed to every body and point frame
     per_body_topics_limit: int  # up to this many bodies, every per-body topic exists at start
+    # The operator's resource limits of a scene load (rigid_sim.core.scene_limits).
+    max_scene_bytes: int   # bytes of the scene file
+    max_bodies: int        # bodies of a scene
+    max_samples: int       # inertia samples of all bodies together
+    max_mesh_bytes: int    # bytes of all distinct mesh files together
+    max_mesh_faces: int    # faces of one mesh
+
+    @property
+    def resource_limits(self):
+        """Return the operator's limits, as :func:`rigid_sim.core.scene.load_scene` takes them."""
+        return {name: getattr(self, name) for name in RESOURCE_LIMITS}
 
     @property
     def publish_every(self):
@@ -121,14 +139,22 @@ SPECS = {
     'step_ticks': Spec(int, 'ticks that one ~/step call advances', 1, MAX_STEP_TICKS),
     'frame_prefix': Spec(str, 'prefixed to every body and point frame in messages and tf '
                               '(e.g. sim1/), for several simulators on one graph',
-                         pattern=r'(?!/)(?!.*//)[A-Za-z0-9_/]*',
-                         pattern_meaning='letters, digits, _ and /, not starting with / and '
-                                         'without //'),
+                         pattern=FRAME_PREFIX,
+                         pattern_meaning='name tokens (letters, digits and _, not starting '
+                                         'with a digit) each followed by /'),
     'per_body_topics_limit': Spec(int, 'a scene of at most this many bodies has every '
                                        "body's pose, twist, odom and wrench topic from the "
                                        'start; in a larger one each is made once a '
                                        'subscriber (wrench: a publisher) appears on it; read '
                                        'when a scene is loaded', 0, 1_000_000),
+    **{name: Spec(int, f'{what}; a scene file may lower it in its limits:, never raise it; '
+                       'read when a scene is loaded', 1, MAX_RESOURCE_LIMIT)
+       for name, what in (
+           ('max_scene_bytes', 'bytes a scene file may have at most'),
+           ('max_bodies', 'bodies a scene may have at most'),
+           ('max_samples', 'inertia samples all bodies of a scene may draw together'),
+           ('max_mesh_bytes', 'bytes of all distinct mesh files of a scene together'),
+           ('max_mesh_faces', 'faces of one mesh at most'))},
 }
 
 
@@ -218,7 +244,7 @@ def declare(node):
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
                 'step_ticks': 1, 'frame_prefix': '',
-                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT}
+                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)
@@ -252,6 +278,9 @@ def updated(settings, changes):
     """
     values = {change.name: coerce(change.name, change.value)
               for change in changes if change.name in SPECS}
+    if values.get('start_paused', settings.start_paused) != settings.start_paused:
+        raise ParameterError("parameter 'start_paused': read at start only; call ~/pause to "
+                             'pause or resume the running node')
     if 'integrator' in values:
         _check_integrator(values['integrator'])
     return replace(settings, **values)

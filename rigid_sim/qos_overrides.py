@@ -12,12 +12,16 @@ than a publisher or another policy is refused at start with the reason instead.
 Only the publishers an override names get the options, so the node does not declare
 parameters for thousands of per-body topics nobody tunes. Overrides are read at start, as
 ROS reads them; a publisher created again (a scene reload) keeps the profile it got then.
+Setting one at runtime is refused saying so (rclpy would refuse an undeclared one as
+"Invalid access to undeclared parameter(s): []", its list of names consumed by the check).
 """
 import re
 
+from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.qos import QoSPolicyKind
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
+from rigid_sim.core.text import shown
 from rigid_sim.parameters import ParameterError
 
 # History depth of every topic the node publishes or subscribes to, unless overridden here.
@@ -26,6 +30,14 @@ POLICIES = {kind.name.lower(): kind for kind in (
     QoSPolicyKind.HISTORY, QoSPolicyKind.DEPTH, QoSPolicyKind.RELIABILITY,
     QoSPolicyKind.DURABILITY)}
 NAME = re.compile(r'qos_overrides\.(?P<topic>/[^.]*)\.(?P<entity>[^.]+)\.(?P<policy>[^.]+)\Z')
+
+
+class ReadAtStart(ParameterNotDeclaredException):
+    """A QoS override set at runtime; rclpy's parameter service answers with ``str()``."""
+
+    def __init__(self, names):
+        Exception.__init__(self, f'{shown(names)}: QoS overrides are read at start only '
+                                 '(--params-file or -p); restart the node to change them')
 
 
 class QosOverrides:
@@ -49,6 +61,7 @@ class QosOverrides:
         self._profiles = {}    # fully qualified topic -> QoSProfile it got at creation
         self._published = set()   # fully qualified topics of every publisher created
         self.starting = True   # overrides are declared while the node starts only
+        node.add_pre_set_parameters_callback(self._refuse_undeclared)
         # rclpy keeps the overrides only in this attribute (parameters.declare reads it too).
         for name in node._parameter_overrides:
             if name.startswith('qos_overrides.'):
@@ -63,6 +76,18 @@ class QosOverrides:
                 f'qos_overrides.<fully qualified topic>.publisher.<policy> with a policy in '
                 f'{sorted(POLICIES)}')
         return match['topic']
+
+    def _refuse_undeclared(self, changes):
+        """Raise ReadAtStart for a change of an undeclared QoS override; else pass all on.
+
+        rclpy calls this before its own checks, as the first step of every set (not of a
+        declaration); a declared override is read-only, and rclpy refuses it so.
+        """
+        names = [change.name for change in changes if change.name.startswith('qos_overrides.')
+                 and not self._node.has_parameter(change.name)]
+        if names:
+            raise ReadAtStart(names)
+        return changes
 
     def create_publisher(self, kind, topic, qos, **options):
         """``node.create_publisher``, honouring the overrides of ``topic``."""

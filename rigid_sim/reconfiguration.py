@@ -77,9 +77,6 @@ class Reconfiguration:
         try:
             proposed = parameters.updated(self.accepted, changes)
             names = {change.name for change in changes}
-            if 'start_paused' in names and not self._reverting:
-                raise parameters.ParameterError(
-                    "parameter 'start_paused': read at start only; call ~/pause instead")
             if 'scene' in names and not self._reverting:
                 find_scene(proposed.scene)   # a missing file is refused at once
             elif 'world_frame' in names:

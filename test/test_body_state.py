@@ -93,12 +93,35 @@ def test_set_twist_moves_the_frame_origin_as_given_and_keeps_the_pose(world):
     (lambda w: with_pose(w.bodies, w.y, 0, [0, 0, 0], [0, 0, 0, 1.1]), 'not a unit'),
     (lambda w: with_pose(w.bodies, w.y, 0, [0, 0, 0], [0, 0, 0, 0]), 'not a unit'),
     (lambda w: with_twist(w.bodies, w.y, 0, [0, 0, 0], [0, math.inf, 0]), 'non-finite'),
+    # 1e308 m/s would overflow P = M v to inf, 1e200 rad/s the energy I w^2.
+    (lambda w: with_twist(w.bodies, w.y, 0, [1e308, 0, 0], [0, 0, 0]),
+     r'linear\.x is 1e\+308, above 1e\+15'),
+    (lambda w: with_twist(w.bodies, w.y, 0, [0, 0, 0], [1e200, 0, 0]), r'angular\.x is 1e\+200'),
+    (lambda w: with_pose(w.bodies, w.y, 0, [0, 0, -1e16], [0, 0, 0, 1]), r'position\.z is'),
+    (lambda w: with_pose(w.bodies, w.y, 0, [0, 5e-324, 0], [0, 0, 0, 1]),
+     r'position\.y is 4\.94e-324, a subnormal number: write floats \(15\.0\)'),
+    (lambda w: with_pose(w.bodies, w.y, 0, [0, 0, 0], [1e-310, 0, 0, 1]),
+     r'orientation\.x .* subnormal'),
 ])
 def test_bad_state_is_refused_and_changes_nothing(world, change, reason):
     before = world.y.copy()
     with pytest.raises(ValueError, match=reason):
         change(world)
     np.testing.assert_array_equal(world.y, before)
+
+
+def test_a_twist_at_the_scene_number_bound_is_taken_and_stays_finite(world):
+    """1e15 m/s and rad/s, the largest a scene may give, set finite momenta and energy.
+
+    P = M (v + omega x R c) and L = I omega are read back through the state: the frame
+    origin moves at the velocity set, to double precision.
+    """
+    bound = np.full(3, 1e15)
+    world.y = with_twist(world.bodies, world.y, 0, bound, -bound)
+    assert np.all(np.isfinite(world.y)) and math.isfinite(world.energy())
+    _, _, velocity, angular_velocity = frame_state(world, 0)
+    np.testing.assert_allclose(angular_velocity, -bound, rtol=1e-12)
+    np.testing.assert_allclose(velocity, bound, rtol=1e-9)
 
 
 def test_nearly_unit_quaternion_is_normalised(world):
@@ -151,15 +174,31 @@ def test_set_pose_and_twist_over_ros_take_effect_at_the_next_tick(paused):
      'unknown frame_id'),
     (lambda sim: sim.set_twist('offset', [0, 0, 0], [0, 0, 0], frame_id=''), 'unknown frame_id'),
     (lambda sim: sim.set_twist('offset', [0, math.inf, 0], [0, 0, 0]), 'non-finite'),
+    (lambda sim: sim.set_twist('offset', [1e308, 0, 0], [0, 0, 0]), 'linear.x is 1e+308'),
+    (lambda sim: sim.set_twist('offset', [0, 0, 0], [1e200, 0, 0]), 'angular.x is 1e+200'),
+    (lambda sim: sim.set_pose('offset', [0, 0, 5e-324], [0, 0, 0, 1]),
+     'position.z is 4.94e-324, a subnormal number: write floats (15.0)'),
+    (lambda sim: sim.set_pose('offset', [0, 0, 0], [0, 0, 0, 1], frame_id='x' * 100_000),
+     "unknown frame_id 'xxxx"),
+    (lambda sim: sim.set_twist('offset', [0, 0, 0], [0, 0, 0], frame_id='x' * 100_000),
+     '...(100002 characters)...'),
 ])
 def test_refused_state_over_ros_changes_nothing_and_is_counted(paused, send, reason):
+    """A refused set_pose or set_twist changes no body, is counted and named, quoted short.
+
+    Nothing non-finite is published after it: the bodies keep the state they had.
+    """
     before = [paused.state(name) for name in ('offset', 'ball')]
     send(paused)
-    paused.tick(1)
+    paused.tick(3)
     for name, state in zip(('offset', 'ball'), before):
         for now, then in zip(paused.state(name), state):
             np.testing.assert_array_equal(now, then)
+    twists = paused.received[paused.topic('offset/twist')]
+    assert all(np.isfinite([t.twist.linear.x, t.twist.angular.x]).all() for t in twists)
     values = paused.diagnostics()
     assert values['refused inputs offset'] == '1' and values['refused inputs'] == '1'
     assert reason in values['last refused input']
     assert values['last refused input'].startswith('~/offset/set_')
+    assert len(values['last refused input']) < 400
+    assert math.isfinite(float(values['energy [J]']))

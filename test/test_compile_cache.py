@@ -1,9 +1,15 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""numba's cache is keyed on the core's sources, and a compile is told apart from a load."""
+"""numba's cache is keyed on the core's sources, and a compile is told apart from a load.
+
+A damaged or unusable cache never stops a process: the damaged entries are compiled and
+cached again, an unusable directory caches nothing, each said once. numba's cache settings
+are process-wide, so these run in child processes with a cache directory of their own.
+"""
 import os
 from pathlib import Path
 import shutil
+import signal
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -29,6 +35,23 @@ with event.install_listener('numba:compile', compilations):
     kinematics.cross(np.ones(3, np.float32), np.ones(3, np.float32))
 print(CACHE_DIRECTORY, compilations.count)
 '''
+
+
+# The child compiles (or loads) two small kernels for a signature nothing else uses and
+# prints how many it compiled, how many damaged entries it deleted and the compile note.
+TWO_KERNELS = '''
+import numpy as np
+from numba.core import event
+from rigid_sim.core import compile_cache, kinematics
+from rigid_sim.core.warm_up import Compilations
+compilations = Compilations()
+with event.install_listener('numba:compile', compilations):
+    kinematics.cross(np.ones(3, np.float32), np.ones(3, np.float32))
+    kinematics.add(np.ones(3, np.float32), np.ones(3, np.float32))
+print(compilations.count, compile_cache.STATE.healed, compile_cache.caching_note())
+'''
+EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
+EXIT_TIMEOUT = 30.0   # s: a liveness bound only
 
 
 def cached_files(root):
@@ -145,7 +168,7 @@ def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     assert node_warm_up(world, 'rk4', logger) == 1
     assert len(logger.lines) == 2
     assert logger.lines[0].startswith('compiling the rk4 kernels for 1 bodies with effects '
-                                      '[none]: not in the kernel cache ')
+                                      '[none], not found in the kernel cache (')
     assert logger.lines[1].startswith('compiled 1 kernels in ')
     assert node_warm_up(world, 'rk4', logger) == 0
     assert len(logger.lines) == 2
@@ -165,3 +188,101 @@ def test_a_second_node_for_the_same_scene_compiles_nothing(ros_context):
     finally:
         first.destroy_node()
         second.destroy_node()
+
+
+def run_two_kernels(environment):
+    """Run ``TWO_KERNELS``: (compiled, healed, note) and its standard error."""
+    done = subprocess.run([sys.executable, '-c', TWO_KERNELS], env=environment,
+                          cwd=PACKAGE.parent, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    compiled, healed, note = done.stdout.strip().split(' ', 2)
+    return (int(compiled), int(healed), note), done.stderr
+
+
+def own_cache(tmp_path):
+    """Return an environment whose kernel cache is new, under ``tmp_path``, and its directory."""
+    environment = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / 'cache'))
+    return environment, tmp_path / 'cache' / 'rigid_sim' / 'numba' / compile_cache.source_key()
+
+
+def truncate(path):
+    path.write_bytes(path.read_bytes()[:100])
+
+
+def scribble(path):
+    path.write_bytes(b'not a pickle\n' * 10)
+
+
+def test_damaged_cache_files_are_warned_about_once_and_compiled_again(tmp_path):
+    """Truncated code files, then garbage index files: each start warns once and rebuilds.
+
+    numba raises UnpicklingError or EOFError loading them; the kernels are compiled again,
+    cached again, and the next process loads them without compiling.
+    """
+    environment, directory = own_cache(tmp_path)
+    cached = f'cached afterwards in {directory}'
+    assert run_two_kernels(environment)[0] == (2, 0, cached)
+    for damage, suffix in ((truncate, '.nbc'), (scribble, '.nbi')):
+        damaged = [path for path in directory.rglob(f'*{suffix}')
+                   if path.name.startswith(('kinematics.cross', 'kinematics.add'))]
+        assert len(damaged) == 2
+        for path in damaged:
+            damage(path)
+        counts, errors = run_two_kernels(environment)
+        assert counts == (2, 2, cached), errors
+        assert errors.count('damaged entries are deleted and compiled again') == 1, errors
+        assert run_two_kernels(environment) == ((0, 0, cached), '')
+
+
+def test_an_unusable_cache_directory_caches_nothing_and_says_so_once(tmp_path):
+    """NUMBA_CACHE_DIR naming a regular file: kernels compile in memory, nothing is written.
+
+    The warning names the directory and the reason; no temporary directory is made, and
+    nothing lands in the package tree.
+    """
+    in_package = cached_files(PACKAGE)
+    blocker = tmp_path / 'a_file'
+    blocker.write_text('')
+    temporary = tmp_path / 'tmp'
+    temporary.mkdir()
+    environment = dict(os.environ, NUMBA_CACHE_DIR=str(blocker), TMPDIR=str(temporary))
+    for _ in range(2):   # every process compiles again: nothing was cached
+        (compiled, healed, note), errors = run_two_kernels(environment)
+        assert (compiled, healed) == (2, 0)
+        assert note.startswith(f'not cached: {blocker}/rigid_sim/numba/') and \
+            note.endswith('cannot be used (Not a directory)')
+        assert errors.count('the compiled kernels will not be cached') == 1, errors
+    assert list(temporary.iterdir()) == [] and blocker.read_text() == ''
+    assert cached_files(PACKAGE) == in_package
+
+
+def test_a_node_stopped_while_compiling_without_a_cache_leaves_no_files(tmp_path):
+    """Without a usable cache the node says it will not cache; SIGTERM leaves nothing behind.
+
+    Its compile line says why the kernels are not cached; a SIGTERM as it compiles ends it
+    with status 0 and nothing in its temporary directory.
+    """
+    blocker = tmp_path / 'a_file'
+    blocker.write_text('')
+    temporary = tmp_path / 'tmp'
+    temporary.mkdir()
+    environment = dict(os.environ, NUMBA_CACHE_DIR=str(blocker), TMPDIR=str(temporary))
+    node = subprocess.Popen([str(EXECUTABLE), '--ros-args', '-r',
+                             f'__ns:=/cache{os.getpid()}'], env=environment,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        while not (lines and 'compiling' in lines[-1]):
+            lines.append(node.stdout.readline())
+            assert lines[-1], f'ended before compiling:\n{"".join(lines)}'
+        node.send_signal(signal.SIGTERM)
+        output = ''.join(lines) + node.communicate(timeout=EXIT_TIMEOUT)[0]
+    finally:
+        if node.poll() is None:
+            node.kill()
+    assert node.returncode == 0, output
+    assert f'not cached: {blocker}/rigid_sim/numba/' in lines[-1]
+    assert 'cannot be used (Not a directory)' in lines[-1], lines[-1]
+    assert 'afterwards' not in output and 'next start' not in output
+    assert output.count('the compiled kernels will not be cached') == 1, output
+    assert list(temporary.iterdir()) == []

@@ -162,6 +162,7 @@ def test_same_seed_same_noise_other_seed_other_noise():
     ('{point: nowhere}', 'bodies[0].imu.point', "no point named 'nowhere'"),
     ('{rate: -1.0}', 'bodies[0].imu.rate', 'positive'),
     ('{seed: -3}', 'bodies[0].imu.seed', '>= 0'),
+    ('{seed: 1180591620717411303424}', 'bodies[0].imu.seed', 'at most 1e+15'),   # 2**70
     ('{noise: {gyro: {stdev: 0.1}}}', 'bodies[0].imu.noise.gyro.stdev', 'unknown key'),
     ('{noise: {accel: {stddev: -0.1}}}', 'bodies[0].imu.noise.accel.stddev', 'non-negative'),
 ])

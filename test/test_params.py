@@ -15,6 +15,8 @@ import yaml
 from rclpy.parameter import Parameter
 
 from rigid_sim import conversions
+from rigid_sim.core.scene import SceneError
+from rigid_sim.core.scene_limits import WORK_LIMITS
 from rigid_sim.node import RigidSimNode
 from rigid_sim.parameters import SPECS, ParameterError
 
@@ -86,6 +88,9 @@ def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, wri
     ('integrator', 'leapfrog', 'unknown integrator'), ('tolerance', 0, 'outside the range'),
     ('wrench_timeout', -0.1, 'outside the range'), ('world_frame', ' ', 'must not be empty'),
     ('publish_clock', 'yes', 'expected a bool'),
+    ('frame_prefix', '1/', 'not starting with a digit'), ('frame_prefix', 'sim/2b/', 'name '),
+    ('max_bodies', 0, 'outside the range'), ('max_samples', 2.5, 'expected an integer'),
+    ('max_scene_bytes', -1, 'outside the range'),
 ])
 def test_bad_value_at_start_is_refused_naming_parameter_and_reason(
         ros_context, write_scene, name, value, reason):
@@ -244,3 +249,53 @@ def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
     sim.tick(8)
     position, _, velocity, _, t = sim.state('box')
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
+
+
+# 150 bytes asking for 1e8 samples (~45 s and 9.6 GB) in its own limits: block.
+GREEDY = ('limits: {max_samples: 100000000}\nbodies:\n  - {name: b, mass: 1.0, shape: {type: '
+          'box, size: [1.0, 1.0, 1.0]}, inertia: {method: sampling, samples: 100000000}}\n')
+
+
+def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
+        ros_context, harness, write_scene, monkeypatch):
+    """A scene asking for more than the node's limit parameters is refused before any work.
+
+    At start the node does not start; at runtime the change is refused and the old scene
+    runs on. A runtime scene change is held to the limits the parameters have then.
+    """
+    def never(*args, **kwargs):
+        raise AssertionError('sampled an inertia')
+    monkeypatch.setattr('rigid_sim.core.inertia.sampling_estimate', never)
+    greedy = write_scene(GREEDY, 'greedy.yaml')
+    refusal = (f"limits.max_samples: 100000000 is above the operator's limit of "
+               f"{WORK_LIMITS['max_samples']}: a scene may lower its limits, never raise them "
+               "(the node's parameter max_samples raises it)")
+    with pytest.raises(SceneError) as refused:
+        RigidSimNode(context=ros_context, parameter_overrides=[Parameter('scene', value=greedy)])
+    assert refusal in str(refused.value)
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    result, = sim.set_parameters(scene=greedy)
+    assert not result.successful and refusal in result.reason
+    three = write_scene('bodies:\n' + ''.join(
+        f'  - {{name: b{i}, mass: 1.0, shape: {{type: sphere, radius: 0.1}}}}\n'
+        for i in range(3)), 'three.yaml')
+    lowered, scene = sim.set_parameters(max_bodies=2, scene=three)
+    assert lowered.successful and sim.sim.settings.max_bodies == 2
+    assert not scene.successful and '3 bodies, above the limit of 2' in scene.reason
+    raised, scene = sim.set_parameters(max_bodies=3, scene=three)
+    assert raised.successful and scene.successful
+    assert [body.name for body in sim.sim.scene.bodies] == ['b0', 'b1', 'b2']
+
+
+def test_start_paused_set_at_runtime_is_refused_pointing_at_pause(harness, write_scene):
+    """start_paused is read at start only: a change at runtime is refused, not ignored."""
+    sim = harness(write_scene(SCENE), time_step=0.125)
+    result, = sim.set_parameters(start_paused=True)
+    assert not result.successful
+    assert result.reason == ("parameter 'start_paused': read at start only; call ~/pause to "
+                             'pause or resume the running node')
+    assert not sim.sim.paused and sim.sim.get_parameter('start_paused').value is False
+    same, = sim.set_parameters(start_paused=False)
+    assert same.successful
+    sim.tick(8)
+    assert clock_nanoseconds(sim)[-1] == 1_000_000_000

@@ -6,6 +6,7 @@ What a publisher offers is read from the ROS graph, as another node sees it.
 """
 import pytest
 from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
 from rigid_sim.node import RigidSimNode
@@ -84,3 +85,22 @@ def test_subscriber_with_matching_qos_receives_from_an_overridden_publisher(
     assert got[-1].clock.nanosec == 10_000_000
     sim.executor.remove_node(late)
     late.destroy_node()
+
+
+def test_an_override_set_at_runtime_is_refused_as_read_at_start(harness, write_scene):
+    """ros2 param set of a QoS override: refused saying when overrides are read.
+
+    Through the node's parameter service, as the ros2 CLI calls it; the node runs on.
+    """
+    sim = harness(write_scene(SCENE))
+    client = AsyncParameterClient(sim.probe, sim.sim.get_fully_qualified_name())
+    spin_until(sim.executor, client.services_are_ready, what='parameter services')
+    name = 'qos_overrides./rigid_sim/poses.publisher.depth'
+    future = client.set_parameters([Parameter(name, value=5)])
+    spin_until(sim.executor, future.done, what='set_parameters response')
+    result, = future.result().results
+    assert not result.successful
+    assert result.reason == (f"['{name}']: QoS overrides are read at start only "
+                             '(--params-file or -p); restart the node to change them')
+    assert depth(sim.sim, '/rigid_sim/poses') == 10
+    sim.tick(1)

@@ -170,13 +170,92 @@ def test_samples_are_refused_before_they_are_drawn(tmp_path):
     refused(path, re.escape('bodies[1].inertia.samples'), '2000 drawn by earlier bodies')
 
 
-def test_body_count_is_bounded_and_the_limit_can_be_raised(tmp_path):
+def test_body_count_is_bounded_and_only_the_operator_raises_it(tmp_path):
+    """A scene may lower max_bodies; the loader's argument (the node's parameter) raises it."""
     path = tmp_path / 'bodies.yaml'
     bodies = ''.join(f'  - {BOX % (f"b{i}", "")}\n' for i in range(3))
     path.write_text('limits: {max_bodies: 2}\nbodies:\n' + bodies)
-    refused(path, 'bodies', '3 bodies, above the limit of 2')
+    refused(path, 'bodies', "3 bodies, above the limit of 2 \\(the scene's own limits")
+    path.write_text('bodies:\n' + bodies)
+    with pytest.raises(SceneError, match="3 bodies, above the limit of 2 .*the node's parameter "
+                                         'max_bodies raises it'):
+        load_scene(str(path), max_bodies=2)
     path.write_text('limits: {max_bodies: 3}\nbodies:\n' + bodies)
-    assert len(load_scene(str(path)).bodies) == 3
+    with pytest.raises(SceneError, match=re.escape(
+            f"{path}: limits.max_bodies: 3 is above the operator's limit of 2: a scene may "
+            "lower its limits, never raise them (the node's parameter max_bodies raises it)")):
+        load_scene(str(path), max_bodies=2)
+    assert len(load_scene(str(path), max_bodies=3).bodies) == 3
+
+
+# 150 bytes that asked for 1e8 samples: 45 s and 9.6 GB when a file could raise its limits.
+GREEDY = ('limits: {max_samples: 100000000}\nbodies:\n  - {name: b, mass: 1.0, shape: {type: '
+          'box, size: [1.0, 1.0, 1.0]}, inertia: {method: sampling, samples: 100000000}}\n')
+
+
+def test_a_scene_asking_for_more_than_the_operator_allows_is_refused_before_any_work(
+        tmp_path, monkeypatch):
+    """Its limits: is refused naming the key, both values and the parameter that raises it."""
+    def never(*args, **kwargs):
+        raise AssertionError('sampled an inertia')
+    monkeypatch.setattr('rigid_sim.core.inertia.sampling_estimate', never)
+    path = tmp_path / 'greedy.yaml'
+    path.write_text(GREEDY)
+    assert path.stat().st_size < 160
+    message = refused(path, re.escape('limits.max_samples'),
+                      f"100000000 is above the operator's limit of {WORK_LIMITS['max_samples']}")
+    assert "the node's parameter max_samples raises it" in message
+    for name in WORK_LIMITS:   # each limit alike
+        path.write_text(f'limits: {{{name}: {WORK_LIMITS[name] + 1}}}\n' + scene_text())
+        refused(path, re.escape(f'limits.{name}'), f"above the operator's limit .*{name}")
+
+
+def test_the_operator_sets_the_file_size_limit_and_no_scene_can_change_it(tmp_path):
+    """max_scene_bytes bounds the file before it is read; a scene has no such key."""
+    path = tmp_path / 'small.yaml'
+    path.write_text(scene_text())
+    size = path.stat().st_size
+    assert len(load_scene(str(path), max_scene_bytes=size).bodies) == 1
+    with pytest.raises(SceneError, match=f"{size} bytes, above the limit of {size - 1} bytes "
+                                         ".*the node's parameter max_scene_bytes raises it"):
+        load_scene(str(path), max_scene_bytes=size - 1)
+    path.write_text(scene_text(head='limits: {max_scene_bytes: 1}\n'))
+    refused(path, re.escape('limits.max_scene_bytes'), 'unknown key')
+
+
+@pytest.mark.parametrize('limits, reason', [
+    ({'max_sampels': 10}, 'unknown resource limit'), ({'max_bodies': 0}, 'positive int'),
+    ({'max_samples': 1.5}, 'positive int'), ({'max_bodies': True}, 'positive int')])
+def test_the_loader_refuses_limits_it_does_not_know(tmp_path, limits, reason):
+    path = tmp_path / 'scene.yaml'
+    path.write_text(scene_text())
+    with pytest.raises(ValueError, match=reason):
+        load_scene(str(path), **limits)
+
+
+def test_yaml_merge_keys_work_as_in_yaml_and_count_towards_the_node_limit(tmp_path):
+    """``<<: *defaults`` brings in the anchor's keys, which the keys beside it override.
+
+    A merge repeats its anchor as an alias does, so a file that multiplies a mapping by
+    merges is refused by the node count before anything is built.
+    """
+    path = tmp_path / 'merged.yaml'
+    path.write_text('bodies:\n'
+                    '  - &box {name: a, mass: 1.0, shape: {type: box, size: [1.0, 1.0, 1.0]}}\n'
+                    '  - {<<: *box, name: b, mass: 2.0}\n'
+                    '  - {<<: [*box, {pose: {position: [0.0, 0.0, 3.0]}}], name: c}\n')
+    a, b, c = load_scene(str(path)).bodies
+    assert (b.name, b.mass_properties.mass) == ('b', 2.0)
+    assert b.shape['size'].tolist() == a.shape['size'].tolist() == [1.0, 1.0, 1.0]
+    assert (c.name, c.mass_properties.mass, c.origin.tolist()) == ('c', 1.0, [0.0, 0.0, 3.0])
+    path.write_text('bodies:\n  - &ball {name: a, mass: 1.0, shape: {type: sphere, radius: 1.0}}'
+                    '\n  - {<<: *ball, name: b, name: c}\n')   # merged keys aside, none twice
+    refused(path, re.escape('line 3, column 26'), "duplicate key 'name'")
+    # Ten levels of ten merges of the level below: 10^10 keys, refused at its first levels.
+    levels = ['k0: &l0 {x: 1}'] + [
+        f'k{i}: &l{i} {{<<: [{", ".join([f"*l{i - 1}"] * 10)}], y{i}: 1}}' for i in range(1, 10)]
+    path.write_text('\n'.join(levels) + '\n')
+    refused(path, r'line \d+, column \d+', f'more than {MAX_NODES} YAML nodes')
 
 
 def test_outside_text_in_a_refusal_is_clipped(tmp_path):

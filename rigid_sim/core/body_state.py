@@ -16,6 +16,7 @@ the functions return a new array and never write into the one they are given.
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rigid_sim.core.input_values import checked
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
 
 # |q.q - 1| above this is a quaternion nobody meant as a rotation (tf2 refuses the same);
@@ -23,18 +24,9 @@ from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION,
 UNIT_QUATERNION_TOLERANCE = 1.0e-2
 
 
-def _finite(name, value, size):
-    value = np.asarray(value, dtype=float)
-    if value.shape != (size,):
-        raise ValueError(f'{name} must have {size} components, got shape {value.shape}')
-    if not np.all(np.isfinite(value)):
-        raise ValueError(f'non-finite {name} {value.tolist()}')
-    return value
-
-
 def unit_quaternion(q):
-    """``q`` (x, y, z, w) normalised; ValueError if non-finite or too far from unit length."""
-    q = _finite('orientation', q, 4)
+    """``q`` (x, y, z, w) normalised; ValueError if refused as an input or far from unit length."""
+    q = checked('orientation', q, 'xyzw')
     squared = float(q @ q)
     if abs(squared - 1.0) > UNIT_QUATERNION_TOLERANCE:
         raise ValueError(f'orientation {q.tolist()} is not a unit quaternion: |q|^2 = '
@@ -80,10 +72,11 @@ def with_pose(bodies, y, index, origin, orientation):
     ``origin`` is (3,), m, world frame; ``orientation`` is (4,), (x, y, z, w), body to world.
 
     The body keeps its twist (velocity of its frame origin and angular velocity, world
-    axes). ValueError, nothing changed, for a non-finite value or a quaternion further than
+    axes). ValueError, nothing changed, for a value the input checks refuse
+    (:func:`rigid_sim.core.input_values.checked`) or a quaternion further than
     ``UNIT_QUATERNION_TOLERANCE`` from unit length (within it, it is normalised).
     """
-    origin = _finite('position', origin, 3)
+    origin = checked('position', origin)
     orientation = unit_quaternion(orientation)
     _, _, velocity, angular_velocity = body_frame_state(bodies, y, index)
     return _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
@@ -94,9 +87,10 @@ def with_twist(bodies, y, index, velocity, angular_velocity):
 
     The frame origin moves at ``velocity`` (3,), m/s, and the body turns at
     ``angular_velocity`` (3,), rad/s, both in world axes. ValueError, nothing changed, for a
-    non-finite value.
+    value the input checks refuse (:func:`rigid_sim.core.input_values.checked`): within
+    the scene's number bound the momenta stay finite, as those of a loaded scene do.
     """
-    velocity = _finite('linear velocity', velocity, 3)
-    angular_velocity = _finite('angular velocity', angular_velocity, 3)
+    velocity = checked('linear', velocity)
+    angular_velocity = checked('angular', angular_velocity)
     origin, orientation, _, _ = body_frame_state(bodies, y, index)
     return _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)

@@ -22,8 +22,10 @@ import numpy as np
 from rigid_sim.core.imu_kinematics import readings
 from rigid_sim.core.imu_noise import NoisySensor, SensorNoise
 from rigid_sim.core.scene_fields import (
-    ABSENT, Mistake, non_negative, number, of_type, positive, raw, table, vector, fields)
+    ABSENT, fields, MAX_MAGNITUDE, Mistake, non_negative, number, of_type, positive, raw, table,
+    vector)
 from rigid_sim.core.state import ANGULAR_MOMENTUM, ORIENTATION
+from rigid_sim.core.text import shown
 
 DEFAULT_FRAME = 'imu'   # child frame <body>/imu of an IMU placed by coordinates
 NOISE = {'stddev': (non_negative, 0.0), 'bias_mean': (number, 0.0),
@@ -69,8 +71,10 @@ def parse_imu(value, key, points):
             raise Mistake(f'{key}.point', f'the body has a point named {DEFAULT_FRAME!r}, the '
                                           'frame of an IMU given by coordinates: name it')
         where, frame = vector(point, f'{key}.point'), DEFAULT_FRAME
-    if imu['seed'] < 0:
-        raise Mistake(f'{key}.seed', f'must be a whole number >= 0, got {imu["seed"]}')
+    # Bounded as every number of a scene is, though numpy would take any size of seed.
+    if not 0 <= imu['seed'] <= MAX_MAGNITUDE:
+        raise Mistake(f'{key}.seed', f'must be a whole number >= 0 and at most '
+                                     f'{MAX_MAGNITUDE:g}, got {shown(imu["seed"])}')
     noise = imu.get('noise', {})
     sensors = {name: SensorNoise(**noise[name]) if name in noise else None
                for name in ('gyro', 'accel')}

@@ -21,7 +21,6 @@ one rotation per body holding a body-axes wrench, whatever the number of wrenche
 """
 import heapq
 import itertools
-import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -30,6 +29,7 @@ from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.effects.base import body_kernel_for
+from rigid_sim.core.input_values import checked, NormLimit
 
 FRAMES = ('world', 'body', 'point', 'world_point')
 DEFAULT_MAX_FORCE = 1.0e4   # N; scenes with heavy bodies raise it in `limits`
@@ -97,20 +97,14 @@ class AppliedWrenches:
         self.version = 0
 
     def check(self, force, torque):
-        """Finite (3,) force and torque within the limits, or ValueError saying why."""
-        force = np.asarray(force, dtype=float).reshape(3)
-        torque = np.asarray(torque, dtype=float).reshape(3)
-        if not (np.all(np.isfinite(force)) and np.all(np.isfinite(torque))):
-            raise ValueError(f'non-finite wrench: force {force}, torque {torque}')
-        # hypot: a 1e300 N component overflows no square; repr: 20.0001 is not shown as 20.
-        magnitude, moment = math.hypot(*force), math.hypot(*torque)
-        if magnitude > self.max_force:
-            raise ValueError(f'|force| {magnitude!r} N above the scene limit '
-                             f'max_force {self.max_force!r} N')
-        if moment > self.max_torque:
-            raise ValueError(f'|torque| {moment!r} N m above the scene limit '
-                             f'max_torque {self.max_torque!r} N m')
-        return force, torque
+        """Return (3,) force and torque if they pass the input checks, else ValueError.
+
+        The checks are every input's (:func:`rigid_sim.core.input_values.checked`: finite,
+        not subnormal, within the number bound) and the scene's ``max_force`` and
+        ``max_torque`` on the magnitudes.
+        """
+        return (checked('force', force, limit=NormLimit(self.max_force, 'max_force', 'N')),
+                checked('torque', torque, limit=NormLimit(self.max_torque, 'max_torque', 'N m')))
 
     def hold(self, body, key, frame, force, torque=(0.0, 0.0, 0.0), point=None,
              expires=np.inf):
@@ -126,10 +120,7 @@ class AppliedWrenches:
         force, torque = self.check(force, torque)
         lever = np.zeros(3)
         if frame in ('point', 'world_point'):
-            point = np.asarray(point, dtype=float).reshape(3)
-            if not np.all(np.isfinite(point)):
-                raise ValueError(f'non-finite point of application {point}')
-            lever = point - self._bodies.com_in_body[body]
+            lever = checked('point', point) - self._bodies.com_in_body[body]
         if frame == 'point':
             torque = torque + np.cross(lever, force)
             frame = 'body'

@@ -28,7 +28,7 @@ from rigid_sim.core.scene_fields import (
     ABSENT, choice, count, describe, fields, list_of, matrix, Mistake, non_negative, of_type,
     points, positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
 from rigid_sim.core.scene_file import FileRefused, load_yaml
-from rigid_sim.core.scene_limits import Budget, WORK_LIMITS
+from rigid_sim.core.scene_limits import Budget, operator_limits, raise_note, WORK_LIMITS
 from rigid_sim.core.text import clipped, shown
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
@@ -106,8 +106,7 @@ EFFECTS = {'gravity': (table({'acceleration': (vector, REQUIRED)}), ABSENT),
 SCENE = {'world_frame': (token, 'world'),
          'limits': (table({'max_force': (positive, DEFAULT_MAX_FORCE),
                            'max_torque': (positive, DEFAULT_MAX_TORQUE),
-                           **{name: (count, default)
-                              for name, default in WORK_LIMITS.items()}}), {}),
+                           **{name: (count, ABSENT) for name in WORK_LIMITS}}), {}),
          'effects': (table(EFFECTS), {}),
          # Raw here; _body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
@@ -194,8 +193,7 @@ def _bodies(entries, world_frame, budget):
     if not entries:
         raise Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
     if len(entries) > budget.limits['max_bodies']:
-        raise Mistake('bodies', f'{len(entries)} bodies, above the limit of '
-                                f'{budget.limits["max_bodies"]} (raise limits.max_bodies)')
+        raise Mistake('bodies', f'{len(entries)} bodies, {budget.above("max_bodies")}')
     bodies = tuple(_body(entry, f'bodies[{i}]', budget) for i, entry in enumerate(entries))
     clash = world_frame_clash(bodies, world_frame)
     if clash is not None:
@@ -287,16 +285,21 @@ def _spring(spring, key, names):
     return SpringSpec(**{**spring, **index})
 
 
-def parse_scene(data, path='<memory>', base_dir='.'):
+def parse_scene(data, path='<memory>', base_dir='.', **limits):
     """Validate an already-loaded scene mapping; mesh files are relative to ``base_dir``.
 
     A non-unit orientation quaternion is normalised; a zero one is refused. Raises
-    :class:`SceneError` naming ``path``, the key and the reason for any mistake.
+    :class:`SceneError` naming ``path``, the key and the reason for any mistake. ``limits``
+    are the operator's work limits (``max_bodies=``, ``max_samples=``, ...; the defaults
+    of :data:`rigid_sim.core.scene_limits.RESOURCE_LIMITS` otherwise); the scene's own
+    ``limits:`` may lower them, and is refused where it asks for more.
     """
+    allowed = operator_limits(limits)
     try:
         scene = fields(data, '', SCENE)
-        limits = scene['limits']
-        budget = Budget({name: limits.pop(name) for name in WORK_LIMITS}, base_dir)
+        asked = scene['limits']
+        budget = Budget({name: asked.pop(name) for name in WORK_LIMITS if name in asked},
+                        allowed, base_dir)
         bodies = _bodies(scene['bodies'], scene['world_frame'], budget)
         effects = dict(scene['effects'])
         names = [body.name for body in bodies]
@@ -312,18 +315,23 @@ def parse_scene(data, path='<memory>', base_dir='.'):
                  effects=effects, **scene['limits'])
 
 
-def load_scene(path):
+def load_scene(path, **limits):
     """Read and validate the scene file at ``path``; see :func:`parse_scene`.
 
     Loads with PyYAML's safe loader (no arbitrary objects, YAML 1.2 floats), made to refuse
     duplicate keys, after the checks of :mod:`rigid_sim.core.scene_file`: a regular file of
-    at most MAX_SCENE_BYTES of UTF-8, nested at most MAX_DEPTH deep, at most MAX_NODES nodes.
+    at most ``max_scene_bytes`` of UTF-8, nested at most MAX_DEPTH deep, at most MAX_NODES
+    nodes. ``limits`` are the operator's resource limits, by name (``max_scene_bytes=``,
+    ``max_bodies=``, ``max_samples=``, ``max_mesh_bytes=``, ``max_mesh_faces=``); the
+    defaults of :data:`rigid_sim.core.scene_limits.RESOURCE_LIMITS` otherwise.
     """
+    allowed = operator_limits(limits)
     try:
-        data = load_yaml(path)
+        data = load_yaml(path, allowed['max_scene_bytes'], raise_note('max_scene_bytes'))
     except FileRefused as refused:
         raise SceneError(path, refused.where, refused.reason) from None
-    return parse_scene(data, path, os.path.dirname(os.path.abspath(path)))
+    return parse_scene(data, path, os.path.dirname(os.path.abspath(path)),
+                       **{name: allowed[name] for name in WORK_LIMITS})
 
 
 EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **settings),

@@ -5,8 +5,9 @@
 Every check here runs before the expensive step it guards: a file is measured before it is
 read, a YAML text is walked as a flat stream of events (no recursion, libyaml when present)
 before any Python object is built, and an alias counts as the whole node it repeats, so a
-"billion laughs" file is refused at its first few kilobytes. The fixed limits below guard
-the parsing that reads a scene's own ``limits:``, so a scene cannot raise them.
+"billion laughs" file is refused at its first few kilobytes. The limits below guard the
+parsing that reads a scene's own ``limits:``, so a scene cannot raise them: nesting and node
+count are fixed, the file size is the operator's (``MAX_SCENE_BYTES`` by default).
 """
 import os
 import re
@@ -18,7 +19,7 @@ import yaml
 from rigid_sim.core.text import clipped
 
 MIB = 1 << 20
-MAX_SCENE_BYTES = 16 * MIB  # a 100 000-body scene is about 15 MB of YAML
+MAX_SCENE_BYTES = 16 * MIB  # default; a 100 000-body scene is about 15 MB of YAML
 MAX_DEPTH = 64              # levels of nested mappings and lists; a valid scene uses 7
 MAX_NODES = 2_000_000       # YAML nodes, an alias counting as the node it repeats
 # YAML 1.2 (core schema) floats: 1e4, -2.5E-3 and 1.0e300 are numbers, as in ROS parameter
@@ -26,6 +27,7 @@ MAX_NODES = 2_000_000       # YAML nodes, an alias counting as the node it repea
 YAML12_FLOAT = re.compile(r'''^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?
                              |[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$''', re.X)
 FLOAT_TAG = 'tag:yaml.org,2002:float'
+MERGE_TAG = 'tag:yaml.org,2002:merge'
 _BASE = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)  # libyaml's C parser when built
 
 
@@ -65,9 +67,12 @@ def _kind(mode):
     return next((name for test, name in kinds if test(mode)), 'a special file')
 
 
-def read_text(path, max_bytes, what):
-    """Read the UTF-8 text of the regular file ``path``, at most ``max_bytes``, or FileRefused."""
-    check_file(path, max_bytes, what)
+def read_text(path, max_bytes, what, limit_note=''):
+    """Read the UTF-8 text of the regular file ``path``, at most ``max_bytes``, or FileRefused.
+
+    ``limit_note`` is :func:`check_file`'s.
+    """
+    check_file(path, max_bytes, what, limit_note)
     try:
         with open(path, 'rb') as stream:
             data = stream.read(max_bytes + 1)  # the file may have grown since the check
@@ -86,7 +91,8 @@ class SceneLoader(_BASE):
     """PyYAML's safe loader with YAML 1.2 floats, refusing a key given twice in one mapping.
 
     PyYAML keeps the last of two equal keys silently; a scene that says ``mass`` twice is
-    a mistake whichever one was meant.
+    a mistake whichever one was meant. Merge keys (``<<: *defaults``) work as in YAML: a key
+    written beside one overrides the merged key, which is no duplicate.
     """
 
     yaml_implicit_resolvers = {
@@ -112,6 +118,11 @@ class SceneLoader(_BASE):
     def construct_mapping(self, node, deep=False):
         seen = set()
         for key_node, _ in node.value:
+            # A merge key (<<) brings in another mapping's keys, which the keys written
+            # beside it override, as YAML says; the base class merges them. Its expansion
+            # was counted by check_structure, as an alias counts as what it repeats.
+            if key_node.tag == MERGE_TAG:
+                continue
             key = self.construct_object(key_node, deep=deep)
             if not isinstance(key, Hashable):
                 continue  # the base class refuses it, saying so
@@ -178,8 +189,11 @@ def _refuse_depth(depth, event):
                           f'nested deeper than {MAX_DEPTH} levels of mappings and lists')
 
 
-def load_yaml(path):
+def load_yaml(path, max_bytes=MAX_SCENE_BYTES, limit_note=''):
     """Parse the YAML document of the scene file ``path``, within the limits above.
+
+    ``max_bytes`` bounds the file's size; ``limit_note`` says who sets it, as
+    :func:`check_file` takes it.
 
     Raises
     ------
@@ -187,7 +201,7 @@ def load_yaml(path):
         Naming the position (or ``(file)``) and the reason: not a regular file, too big,
         not UTF-8, nested too deep, too many nodes, or invalid YAML.
     """
-    text = read_text(path, MAX_SCENE_BYTES, 'scene file')
+    text = read_text(path, max_bytes, 'scene file', limit_note)
     try:
         check_structure(text)
         return yaml.load(text, Loader=SceneLoader)
