@@ -260,8 +260,9 @@ def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
         ros_context, harness, write_scene, monkeypatch):
     """A scene asking for more than the node's limit parameters is refused before any work.
 
-    At start the node does not start; at runtime the change is refused and the old scene
-    runs on. A runtime scene change is held to the limits the parameters have then.
+    At start the node does not start; at runtime the change is prepared beside the running
+    scene, refused, and the parameter set back while the old scene runs on. A runtime scene
+    change is held to the limits the parameters have then.
     """
     def never(*args, **kwargs):
         raise AssertionError('sampled an inertia')
@@ -274,14 +275,16 @@ def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
         RigidSimNode(context=ros_context, parameter_overrides=[Parameter('scene', value=greedy)])
     assert refusal in str(refused.value)
     sim = harness(write_scene(SCENE), time_step=0.125)
-    result, = sim.set_parameters(scene=greedy)
-    assert not result.successful and refusal in result.reason
+    assert sim.set_parameters(scene=greedy)[0].successful   # accepted for preparing
+    assert refusal in sim.sim.reconfiguration.last_refusal
+    assert sim.sim.get_parameter('scene').value == sim.sim.settings.scene != greedy
     three = write_scene('bodies:\n' + ''.join(
         f'  - {{name: b{i}, mass: 1.0, shape: {{type: sphere, radius: 0.1}}}}\n'
         for i in range(3)), 'three.yaml')
     lowered, scene = sim.set_parameters(max_bodies=2, scene=three)
     assert lowered.successful and sim.sim.settings.max_bodies == 2
-    assert not scene.successful and '3 bodies, above the limit of 2' in scene.reason
+    assert '3 bodies, above the limit of 2' in sim.sim.reconfiguration.last_refusal
+    assert sim.sim.get_parameter('scene').value != three
     raised, scene = sim.set_parameters(max_bodies=3, scene=three)
     assert raised.successful and scene.successful
     assert [body.name for body in sim.sim.scene.bodies] == ['b0', 'b1', 'b2']
