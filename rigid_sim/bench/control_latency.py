@@ -3,11 +3,11 @@
 """Control latency of ``rigid_sim_node``: calls answered and signals obeyed while it works.
 
 Part of ``rigid_sim_bench node``. The executable runs in its own process, as a user starts
-it; a client in this process, over DDS, times a parameter call (``get_parameters``) and a
-``~/pause`` call from sending to answer (the slowest of five parameter calls), and then the process's exit after SIGTERM, in three
-states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime switch to an integrator
-whose kernels are not in the (fresh) cache, and overload (1000 bodies at rate 1000, more
-than one core can tick). The node promises each answer within 100 ms and each stop within
+it; a client in this process, over DDS, times a parameter call (``get_parameters``, the
+slowest of five) and a ``~/pause`` call from sending to answer, and then the process's exit
+after SIGTERM, in three states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime
+switch to an integrator whose kernels are not in the (fresh) cache, and overload (1000
+bodies at rate 1000, more than one core can tick). The node promises each answer within 100 ms and each stop within
 0.5 s.
 """
 import os

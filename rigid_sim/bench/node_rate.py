@@ -366,7 +366,7 @@ def report(results, seconds, starts=(), control=()):
 
 
 def control_section(rows):
-    """The control-latency section, when it was measured."""
+    """Return the control-latency section, when it was measured."""
     if not rows:
         return []
     return ['', '### Control latency while the node works (promise: answers within 100 ms, '
