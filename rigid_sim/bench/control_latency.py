@@ -7,8 +7,8 @@ it; a client in this process, over DDS, times a parameter call (``get_parameters
 slowest of five) and a ``~/pause`` call from sending to answer, and then the process's exit
 after SIGTERM, in three states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime
 switch to an integrator whose kernels are not in the (fresh) cache, and overload (1000
-bodies at rate 1000, more than one core can tick). The node promises each answer within 100 ms and each stop within
-0.5 s.
+bodies at rate 1000, more than one core can tick). The node promises each answer within
+100 ms and each stop within 0.5 s.
 """
 import os
 import signal
