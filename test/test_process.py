@@ -135,7 +135,7 @@ def run_lockstep(node, executor, cwd, calls, step_ticks=5):
             spin_until(executor, future.done, TIMEOUT, '~/step answered')
             answer = future.result()
             assert answer.success, answer.message
-            time = float(answer.message.split()[-2])
+            time = float(answer.message.split()[4])
             stamp = conversions.to_time(time)
             spin_until(executor, lambda: poses and poses[-1].header.stamp == stamp, TIMEOUT,
                        f'poses at {time} s')
