@@ -36,6 +36,7 @@ from rigid_sim.node import RigidSimNode
 from rigid_sim.resources import find_scene
 
 SECTION = 'rigid_sim_bench node'
+CONTROL_SECTION = 'rigid_sim_bench node: control latency'
 WRENCH_INPUT_LIMIT = 100   # from this N on, no wrench subscriptions (see the module text)
 MATCH_TIMEOUT = 30.0       # s; discovery takes seconds, more with thousands of endpoints
 STOP_TIMEOUT = 5.0         # s the listener gets to exit after SIGINT
@@ -327,7 +328,7 @@ def default_scene_goals(results):
     return lines
 
 
-def report(results, seconds, starts=(), control=()):
+def report(results, seconds, starts=()):
     """Return the Markdown section: how it was measured, the tables, the goals."""
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]   # this benchmark times wall clock
@@ -362,16 +363,18 @@ def report(results, seconds, starts=(), control=()):
         'wall-clock timer '
         'cannot average above 1, and window edges move it by ~1e-3; only rows whose '
         f'integrator steps are <= {1e3 * GOAL_PHYSICS_STEP:g} ms count as 1 kHz physics)',
-        *goals(results), *control_section(control)])
+        *goals(results)])
 
 
-def control_section(rows):
-    """Return the control-latency section, when it was measured."""
-    if not rows:
-        return []
-    return ['', '### Control latency while the node works (promise: answers within 100 ms, '
-                'a stop within 0.5 s)', control_latency.__doc__.split('\n\n')[1].replace(
-                    '\n', ' '), '', *control_latency.table(rows)]
+def control_report(rows):
+    """Return the control-latency section: how it was measured and the table."""
+    machine = [line for line in bench.machine_description()
+               if not line.startswith('- CPU time')]
+    return '\n'.join([
+        '### Control latency while the node works (promise: answers within 100 ms, a stop '
+        'within 0.5 s)', *machine, f'- Command: `{bench.command_line()}`',
+        '- ' + control_latency.__doc__.split('\n\n')[1].replace('\n', ' '), '',
+        *control_latency.table(rows)])
 
 
 def add_arguments(parser):
@@ -386,6 +389,8 @@ def add_arguments(parser):
     parser.add_argument('--warmup', type=float, help=f'warm-up s per row (default {WARMUP})')
     parser.add_argument('--no-control', dest='control', action='store_false',
                         help='skip the control-latency rows (not run with --quick either)')
+    parser.add_argument('--control-only', action='store_true',
+                        help='only the control-latency rows')
     parser.add_argument('--out', type=Path, help='Markdown file whose section is (re)written')
 
 
@@ -395,37 +400,56 @@ def main(args):
                                            start_sizes=START_SIZES)
     seconds = (chosen['warmup'] if args.warmup is None else args.warmup,
                chosen['duration'] if args.duration is None else args.duration)
-    results = []
+    results, starts = [], []
     with ros_environment() as log_dir:
-        context = rclpy.Context()
-        rclpy.init(context=context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
-        try:
-            for config in chosen['configs']:
-                scene = Path(log_dir, f'boxes_{config.bodies}.yaml')
-                if config.scene == DEFAULT_SCENE:
-                    scene = find_scene(DEFAULT_SCENE)
-                else:
-                    scene.write_text(scene_text(config.bodies))
-                for integrator in args.integrators:
-                    results.append(measure(config, integrator, context, str(scene), log_dir,
-                                           seconds))
-                    print(f'{config} {integrator}: real-time factor '
-                          f'{results[-1]["real_time_factor"]:.3f}', file=sys.stderr)
-        finally:
-            rclpy.try_shutdown(context=context)
-        starts = []
-        for n in chosen['start_sizes']:
-            scene = Path(log_dir, f'wrenched_{n}.yaml')
-            scene.write_text(scene_text(n, wrench_input=True))
-            starts.append((n, start_and_stop(str(scene), log_dir)))
-            print(f'start and stop at N = {n}: {starts[-1][1]}', file=sys.stderr)
-        control = []
+        if not args.control_only:
+            results = run_configurations(chosen['configs'], args.integrators, log_dir, seconds)
+            starts = run_starts(chosen['start_sizes'], log_dir)
         if chosen.get('control', True) and args.control:
             scene = Path(log_dir, 'boxes_1000.yaml')
             scene.write_text(scene_text(1000))
-            control = control_latency.measure(str(scene), log_dir)
-    text = report(results, seconds, starts, control)
-    print(text)
-    if args.out is not None:
-        bench.write_section(args.out, SECTION, text)
+            write(args.out, CONTROL_SECTION, control_report(
+                control_latency.measure(str(scene), log_dir)))
+    if not args.control_only:
+        write(args.out, SECTION, report(results, seconds, starts))
     return results
+
+
+def write(out, section, text):
+    """Print ``text`` and make it ``section`` of the file ``out`` (when given)."""
+    print(text)
+    if out is not None:
+        bench.write_section(out, section, text)
+
+
+def run_configurations(configs, integrators, log_dir, seconds):
+    """Measure every configuration with every integrator, in one rclpy context."""
+    results = []
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
+    try:
+        for config in configs:
+            scene = Path(log_dir, f'boxes_{config.bodies}.yaml')
+            if config.scene == DEFAULT_SCENE:
+                scene = find_scene(DEFAULT_SCENE)
+            else:
+                scene.write_text(scene_text(config.bodies))
+            for integrator in integrators:
+                results.append(measure(config, integrator, context, str(scene), log_dir,
+                                       seconds))
+                print(f'{config} {integrator}: real-time factor '
+                      f'{results[-1]["real_time_factor"]:.3f}', file=sys.stderr)
+    finally:
+        rclpy.try_shutdown(context=context)
+    return results
+
+
+def run_starts(sizes, log_dir):
+    """Start and stop the executable on a scene of each size; [(N, (start s, stop s))]."""
+    starts = []
+    for n in sizes:
+        scene = Path(log_dir, f'wrenched_{n}.yaml')
+        scene.write_text(scene_text(n, wrench_input=True))
+        starts.append((n, start_and_stop(str(scene), log_dir)))
+        print(f'start and stop at N = {n}: {starts[-1][1]}', file=sys.stderr)
+    return starts
