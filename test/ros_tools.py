@@ -9,7 +9,10 @@ by the tests as ``ros_tools`` (pytest puts ``test/`` on sys.path).
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
+from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped, WrenchStamped
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from visualization_msgs.msg import MarkerArray
 
 from rigid_sim import conversions
 
@@ -75,15 +78,14 @@ def published_state(poses, twists):
 
 
 class Diagnostics:
-    """The simulator's /diagnostics, as a node of the test hears them.
+    """The simulator's /diagnostics, as ``node`` (of the test) hears them.
 
     The node publishes them once a second of wall time; :meth:`now` has it publish at once.
     """
 
-    def __init__(self, sim):
+    def __init__(self, sim, node):
         self._sim = sim
-        self.heard = record(sim.create_node('diagnostics_listener'), DiagnosticArray,
-                            '/diagnostics')
+        self.heard = record(node, DiagnosticArray, '/diagnostics')
 
     def now(self):
         """Have the simulator publish its status now; that status (level, message, values)."""
@@ -97,3 +99,63 @@ class Diagnostics:
     def values(self):
         """Have the simulator publish its status now; its key -> text values."""
         return {item.key: item.value for item in self.now().values}
+
+
+class Probe:
+    """A node of the test beside a kit simulation: hears its outputs, sends it inputs.
+
+    Parameters
+    ----------
+    sim : rigid_sim.testing.Simulation
+    *bodies : str
+        The bodies whose pose, twist and odometry it hears; it also hears /clock, ~/poses
+        and ~/markers.
+    """
+
+    def __init__(self, sim, *bodies):
+        self.sim = sim
+        self.node = sim.create_node('probe')
+        self.heard = {'/clock': record(self.node, Clock, '/clock')}
+        self.listen(*bodies)
+        self._publishers = {}
+        self.diagnostics = Diagnostics(sim, self.node)
+
+    def listen(self, *bodies):
+        """Hear ~/poses, ~/markers and the pose, twist and odometry of ``bodies`` too."""
+        topics = {'poses': PoseArray, 'markers': MarkerArray}
+        for body in bodies:
+            topics.update({f'{body}/pose': PoseStamped, f'{body}/twist': TwistStamped,
+                           f'{body}/odom': Odometry})
+        for topic, kind in topics.items():
+            if topic not in self.heard:
+                self.heard[topic] = record(self.node, kind, self.sim.topic(topic))
+
+    def latest(self, topic):
+        """Return the last message heard on ``topic`` (relative to the simulator, or /name)."""
+        return self.heard[topic][-1]
+
+    def stamps(self, topic):
+        """Return the stamps (s) of every message heard on ``topic``."""
+        return [conversions.to_seconds(m.clock if topic == '/clock' else m.header.stamp)
+                for m in self.heard[topic]]
+
+    def state(self, body):
+        """Position, orientation, velocity, angular velocity, time, as last published."""
+        return published_state(self.heard[f'{body}/pose'], self.heard[f'{body}/twist'])
+
+    def send(self, body, topic, message):
+        """Publish ``message`` on the simulator's ``<body>/<topic>``; it acts at the next tick.
+
+        A new publisher is first matched with the simulator's subscription (the kit's
+        connect), since a message sent before that is lost.
+        """
+        key = (body, topic)
+        if key not in self._publishers:
+            self._publishers[key] = self.node.create_publisher(
+                type(message), self.sim.topic(f'{body}/{topic}'), 10)
+            self.sim.connect()
+        self._publishers[key].publish(message)
+
+    def push(self, body, frame_id, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)):
+        """Send a wrench on ``<body>/wrench``."""
+        self.send(body, 'wrench', wrench(frame_id, force, torque))

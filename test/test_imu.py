@@ -242,8 +242,8 @@ def test_imus_of_a_list_read_at_their_own_points_and_draw_their_own_noise():
     spin = TILT.apply([0.0, 0.0, omega]).tolist()
     spec = scene('[{point: [0.15, -0.05, 0.02]}, {name: tip, point: [-0.1, 0.2, 0.0], '
                  'orientation: false}]', gravity=False, twist=f'{{angular: {spin}}}')
-    assert [(imu.name, imu.frame) for imu in spec.bodies[0].imus] == [('imu', 'imu'),
-                                                                       ('tip', 'tip')]
+    names = [(imu.name, imu.frame) for imu in spec.bodies[0].imus]
+    assert names == [('imu', 'imu'), ('tip', 'tip')]
     _, readings = read(spec, steps=37)
     np.testing.assert_allclose(readings.specific_force, -omega ** 2 * np.array(
         [[0.15, -0.05, 0.0], [-0.1, 0.2, 0.0]]), atol=1e-11)

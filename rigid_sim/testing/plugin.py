@@ -2,9 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """pytest fixtures of the rigid_sim test kit, registered as the ``rigid_sim`` plugin.
 
-``rigid_sim(scene=... or yaml=..., namespace=..., **parameters)`` starts a :class:`Simulation` in the
-test's own rclpy context and executor, with discovery off (only nodes of this context meet)
-and a domain of its own, and cleans everything up after the test. ``rigid_sim_context``
+``rigid_sim(scene=... or yaml=..., namespace=..., **parameters)`` starts a
+:class:`Simulation` in the test's own rclpy context and executor, with discovery off (only
+nodes of this context meet) and a domain of its own, and cleans everything up after the test. ``rigid_sim_context``
 and ``rigid_sim_executor`` are the context and executor, for nodes of your own.
 rclpy is imported only when a fixture is used, so the plugin costs nothing elsewhere.
 """
