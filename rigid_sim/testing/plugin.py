@@ -4,8 +4,9 @@
 
 ``rigid_sim(scene=... or yaml=..., namespace=..., **parameters)`` starts a
 :class:`Simulation` in the test's own rclpy context and executor, with discovery off (only
-nodes of this context meet) and a domain of its own, and cleans everything up after the test. ``rigid_sim_context``
-and ``rigid_sim_executor`` are the context and executor, for nodes of your own.
+nodes of this context meet) and a domain of its own, and cleans everything up after the
+test. ``rigid_sim_context`` and ``rigid_sim_executor`` are the context and executor, for
+nodes of your own.
 rclpy is imported only when a fixture is used, so the plugin costs nothing elsewhere.
 """
 import os
