@@ -135,7 +135,7 @@ class Probe:
         return self.heard[topic][-1]
 
     def stamps(self, topic):
-        """Return the stamps (s) of every message heard on ``topic``."""
+        """Return the times (s) stamped on every message heard on ``topic``."""
         return [conversions.to_seconds(m.clock if topic == '/clock' else m.header.stamp)
                 for m in self.heard[topic]]
 
