@@ -1,9 +1,9 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""Start the rigid_sim node and, if asked, RViz on its packaged view.
+r"""Start the rigid_sim node and, if asked, RViz on its packaged view.
 
     ros2 launch rigid_sim rigid_sim.launch.py scene:=wrenches.yaml rate:=200 rviz:=true
-    ros2 launch rigid_sim rigid_sim.launch.py params_file:=my.yaml namespace:=sim1 \\
+    ros2 launch rigid_sim rigid_sim.launch.py params_file:=my.yaml namespace:=sim1 \
         start_paused:=true
 
 An argument left empty is not passed on, so the node keeps its own default for it (or the

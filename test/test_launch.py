@@ -72,7 +72,7 @@ def launch_file(monkeypatch):
 
 
 def arguments(**given):
-    """The launch context: every argument at its default, but those ``given``."""
+    """Return the launch context: every argument at its default, but those ``given``."""
     tree = ast.parse(LAUNCH.read_text())
     declared, = [ast.literal_eval(node.value) for node in tree.body
                  if isinstance(node, ast.Assign) and node.targets[0].id == 'ARGUMENTS']
