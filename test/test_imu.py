@@ -8,6 +8,7 @@ omega about a principal axis reads omega^2 r towards the axis at distance r, a t
 on a body at rest reads alpha x r with alpha = I^-1 tau.
 """
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -357,3 +358,25 @@ def test_packaged_imu_scene_reads_what_its_comment_and_the_readme_say():
     exact = imus.exact(world, [0])
     np.testing.assert_allclose(exact.angular_velocity[0], [0.0, 0.0, 2.0], atol=1e-9)
     np.testing.assert_allclose(exact.specific_force[0], [-0.4, 0.0, 9.81], atol=1e-4)
+
+
+def test_the_readme_example_of_several_imus_publishes_what_its_comments_say(rigid_sim):
+    """The README's drone: ~/drone/imu with ~/drone/imu/mag and no orientation, ~/drone/nose_imu.
+
+    Level and at rest without gravity, the magnetometer reads the field itself.
+    """
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parents[1] / 'README.md').read_text()
+    text, = [block for block in re.findall(r'```yaml\n(.*?)```', readme, re.S)
+             if 'name: drone' in block]
+    sim = rigid_sim(yaml=text)
+    published = {p.topic_name: p.msg_type for p in sim.node.publishers}
+    assert published['/rigid_sim/drone/imu'] is Imu
+    assert published['/rigid_sim/drone/imu/mag'] is MagneticField
+    assert published['/rigid_sim/drone/nose_imu'] is Imu
+    sim.step(1)
+    first, nose = sim.imu('drone'), sim.imu('drone', 'nose_imu')
+    assert (first.frame_id, nose.frame_id) == ('drone/imu', 'drone/nose')
+    assert first.orientation is None and nose.orientation.tolist() == [0.0, 0.0, 0.0, 1.0]
+    field = yaml.safe_load(text)['magnetic_field']
+    assert np.abs(first.magnetic_field - field).max() < 6 * 1.0e-7
