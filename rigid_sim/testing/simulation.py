@@ -5,52 +5,21 @@ import os
 import tempfile
 import time
 
-from rclpy.duration import Duration
-from rclpy.executors import TimeoutException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import ReliabilityPolicy
 from sensor_msgs.msg import Imu, MagneticField
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_sim.core.body_state import with_pose, with_twist
-from rigid_sim.node import RigidSimNode
+from rigid_sim.testing.delivery import Late, deliver, run_ready_callbacks, wait_until
 from rigid_sim.testing.readings import BodyProperties, BodyState, ImuReading
+from rigid_sim.testing.stepped_node import SteppedNode
 
 __all__ = ['BodyProperties', 'BodyState', 'ImuReading', 'Simulation', 'run_ready_callbacks']
 CONNECT_TIMEOUT = 10.0   # s of wall time for endpoints in one process to match
-ACK_TIMEOUT = 5.0        # s of wall time for one publisher's messages to be delivered
-MAX_ROUNDS = 1000        # rounds of delivery between two ticks before giving up
 STEP_TIMEOUT = 60.0      # s of wall time one step() may take by default
 CALL_TIMEOUT = 10.0      # s of wall time a service call may take
 SENSORS = (Imu, MagneticField)   # what imu() reads: the latest message of each topic
-
-
-def run_ready_callbacks(executor):
-    """Run every callback of ``executor`` that is ready now, without waiting; how many ran."""
-    ran = 0
-    while True:
-        try:
-            handler, _, _ = executor.wait_for_ready_callbacks(timeout_sec=0.0)
-        except TimeoutException:
-            return ran
-        handler()
-        handler.result()   # raises what the callback raised
-        ran += 1
-
-
-class SteppedNode(RigidSimNode):
-    """The simulator as the kit runs it: it ticks only when :meth:`Simulation.step` says."""
-
-    def _describe(self, paused):
-        # The node's own line states a wall rate and a real-time factor; here no wall clock
-        # runs, so the line says what does.
-        s = self.settings
-        return (f'simulating {self.world.bodies.count} bodies from {self.scene.path} with '
-                f'{s.integrator}, no wall clock: the test kit ticks it in step() only, '
-                f'time_step {s.time_step:g} s x {s.substeps} substeps; publishing every '
-                f'{s.publish_every} ticks; topics under {self.get_fully_qualified_name()}/'
-                f'{", paused" if paused else ""}')
 
 
 class Simulation:
@@ -195,13 +164,13 @@ class Simulation:
         try:
             self.connect()
             for done in range(ticks):
-                self._settle(deadline)
+                deliver(self.executor, deadline)
                 if deadline is not None and time.monotonic() >= deadline:
-                    raise _Late
+                    raise Late
                 self.node.tick()
             done = ticks
-            self._settle(deadline)
-        except _Late:
+            deliver(self.executor, deadline)
+        except Late:
             raise TimeoutError(
                 f'step({ticks}) ran out of its timeout of {timeout:g} s of wall time after '
                 f'{done} of {ticks} ticks (simulated time {self.time:g} s): is a callback '
@@ -211,20 +180,7 @@ class Simulation:
 
     def settle(self):
         """Deliver every message in flight and run callbacks until nothing is left to run."""
-        self._settle(None)
-
-    def _settle(self, deadline):
-        for _ in range(MAX_ROUNDS):
-            if deadline is not None and time.monotonic() >= deadline:
-                raise _Late
-            for node in self.executor.get_nodes():
-                for publisher in node.publishers:
-                    if publisher.qos_profile.reliability == ReliabilityPolicy.RELIABLE:
-                        publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT))
-            if run_ready_callbacks(self.executor) == 0:
-                return
-        raise RuntimeError(f'callbacks still ran after {MAX_ROUNDS} rounds of delivery: '
-                           'do they keep publishing to one another?')
+        deliver(self.executor)
 
     def reset(self):
         """Send the simulation back to its initial state at time 0, as ``~/reset`` does."""
@@ -261,12 +217,9 @@ class Simulation:
         client = self._clients[key]
         self._wait(client.service_is_ready, f'service {name}')
         future = client.call_async(request)
-        deadline = time.monotonic() + timeout
-        while not future.done():
-            if time.monotonic() > deadline:
-                client.remove_pending_request(future)
-                raise TimeoutError(f'{name} did not answer within {timeout:g} s')
-            self.executor.spin_once(timeout_sec=0.01)
+        if not wait_until(self.executor, future.done, timeout):
+            client.remove_pending_request(future)
+            raise TimeoutError(f'{name} did not answer within {timeout:g} s')
         self.settle()
         return future.result()
 
@@ -318,12 +271,9 @@ class Simulation:
                     lambda message, topic=topic: self._latest.__setitem__(topic, message), 10)
 
     def _wait(self, condition, topic):
-        deadline = time.monotonic() + CONNECT_TIMEOUT
-        while not condition():
-            if time.monotonic() > deadline:
-                raise RuntimeError(f'{topic} not matched with the simulator within '
-                                   f'{CONNECT_TIMEOUT} s')
-            self.executor.spin_once(timeout_sec=0.01)
+        if not wait_until(self.executor, condition, CONNECT_TIMEOUT):
+            raise RuntimeError(f'{topic} not matched with the simulator within '
+                               f'{CONNECT_TIMEOUT} s')
 
     def close(self):
         """Remove and destroy the simulator and the nodes made by :meth:`create_node`.
@@ -339,7 +289,3 @@ class Simulation:
         if self._folder is not None:
             self._folder.cleanup()
             self._folder = None
-
-
-class _Late(Exception):
-    """step()'s deadline has passed (turned into a TimeoutError naming the step)."""
