@@ -39,9 +39,8 @@ def wrench(frame_id, force=(0.0, 0.0, 0.0), torque=(0.0, 0.0, 0.0)):
     """Return a WrenchStamped in ``frame_id``."""
     message = WrenchStamped()
     message.header.frame_id = frame_id
-    w = message.wrench
-    w.force.x, w.force.y, w.force.z = (float(f) for f in force)
-    w.torque.x, w.torque.y, w.torque.z = (float(t) for t in torque)
+    _set(message.wrench.force, force)
+    _set(message.wrench.torque, torque)
     return message
 
 
@@ -49,8 +48,8 @@ def pose(position, orientation, frame_id='world'):
     """Return a PoseStamped (orientation x, y, z, w) in ``frame_id``."""
     message = PoseStamped()
     message.header.frame_id = frame_id
-    p, q = message.pose.position, message.pose.orientation
-    p.x, p.y, p.z = (float(v) for v in position)
+    _set(message.pose.position, position)
+    q = message.pose.orientation
     q.x, q.y, q.z, q.w = (float(v) for v in orientation)
     return message
 
@@ -59,10 +58,14 @@ def twist(linear, angular, frame_id='world'):
     """Return a TwistStamped in ``frame_id``."""
     message = TwistStamped()
     message.header.frame_id = frame_id
-    t = message.twist
-    t.linear.x, t.linear.y, t.linear.z = (float(v) for v in linear)
-    t.angular.x, t.angular.y, t.angular.z = (float(v) for v in angular)
+    _set(message.twist.linear, linear)
+    _set(message.twist.angular, angular)
     return message
+
+
+def _set(vector, values):
+    """Write three values into a Vector3 or Point, as floats (an int would not do)."""
+    vector.x, vector.y, vector.z = (float(v) for v in values)
 
 
 def published_state(poses, twists):

@@ -9,17 +9,8 @@ import numpy as np
 from std_srvs.srv import SetBool, Trigger
 
 import ros_tools
-
-STEP = 1 / 64  # s
-X0, V0 = np.array([1.0, -2.0, 0.5]), np.array([0.5, 0.25, -1.0])
-SCENE = f"""
-bodies:
-  - name: box
-    shape: {{type: box, size: [0.4, 0.2, 0.1]}}
-    mass: 2.0
-    pose: {{position: {X0.tolist()}}}
-    twist: {{linear: {V0.tolist()}}}
-"""
+from physics_cases import FLIGHT_STEP as STEP, FLIGHT_V0 as V0, FLIGHT_X0 as X0
+from physics_cases import FLYING_BOX as SCENE
 
 
 def test_started_paused_the_node_advances_only_by_step_and_publishes_every_tick(rigid_sim):

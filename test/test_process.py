@@ -23,6 +23,8 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from std_srvs.srv import SetBool, Trigger
 
+from physics_cases import FLIGHT_STEP as STEP, FLIGHT_V0 as V0, FLIGHT_X0 as X0
+from physics_cases import FLYING_BOX
 from rigid_sim import conversions
 from ros_tools import TIMEOUT, record, spin_until
 
@@ -168,18 +170,6 @@ def test_lockstep_from_another_process_gives_bit_identical_poses(probe, tmp_path
     assert [t for t, _ in first] == pytest.approx(expected_times, rel=1e-12)
     assert first == second
     assert first[0][1] != first[-1][1]  # the bodies moved: the comparison means something
-
-
-STEP = 1 / 64  # s, exact in binary: simulated times add up exactly
-X0, V0 = np.array([1.0, -2.0, 0.5]), np.array([0.5, 0.25, -1.0])
-FLYING_BOX = f"""
-bodies:
-  - name: box
-    shape: {{type: box, size: [0.4, 0.2, 0.1]}}
-    mass: 2.0
-    pose: {{position: {X0.tolist()}}}
-    twist: {{linear: {V0.tolist()}}}
-"""
 
 
 def call(node, executor, service_type, name, request):
