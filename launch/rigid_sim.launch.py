@@ -1,10 +1,13 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""Start the rigid_sim node and, if asked, RViz on its packaged view.
+r"""Start the rigid_sim node and, if asked, RViz on its packaged view.
 
     ros2 launch rigid_sim rigid_sim.launch.py scene:=wrenches.yaml rate:=200 rviz:=true
+    ros2 launch rigid_sim rigid_sim.launch.py params_file:=my.yaml namespace:=sim1 \
+        start_paused:=true
 
-An argument left empty is not passed on, so the node keeps its own default for it.
+An argument left empty is not passed on, so the node keeps its own default for it (or the
+value of ``params_file``, which the other arguments override).
 """
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
@@ -19,30 +22,53 @@ ARGUMENTS = {
     'integrator': ('', 'integration method (empty: the node default)'),
     'rate': ('', 'ticks per second of wall time, Hz; 0: as fast as possible '
                  '(empty: the node default)'),
+    'start_paused': ('', 'true: start with integration paused, advanced by ~/step '
+                         '(empty: the node default, false)'),
+    'params_file': ('', 'a parameters YAML file such as config/rigid_sim.yaml; the '
+                        'arguments above override it (empty: none)'),
+    'namespace': ('', 'namespace of the node: topics and services under '
+                      '/<namespace>/rigid_sim/ (empty: none)'),
     'rviz': ('false', 'also start RViz with rviz/rigid_sim.rviz'),
 }
-NUMBERS = ('rate',)   # passed as doubles: the node refuses a text for a number
+PARAMETERS = ('scene', 'integrator', 'rate', 'start_paused')   # passed as node parameters
+NUMBERS = ('rate',)            # passed as doubles: the node refuses a text for a number
+BOOLEANS = ('start_paused',)   # passed as bools, from true or false
+VIEWED = ('markers', 'poses')  # the topics rviz/rigid_sim.rviz names under /rigid_sim/
+
+
+def typed(name, value):
+    """Return the launch argument ``value`` as the type parameter ``name`` has."""
+    if name in NUMBERS:
+        return float(value)
+    if name in BOOLEANS:
+        if value.lower() not in ('true', 'false'):
+            raise ValueError(f'launch argument {name}: expected true or false, got {value!r}')
+        return value.lower() == 'true'
+    return value
 
 
 def simulator(context):
-    """Make the node, with the non-empty arguments as its parameters."""
-    parameters = {}
-    for name in ('scene', 'integrator', 'rate'):
-        value = LaunchConfiguration(name).perform(context)
-        if value:
-            parameters[name] = float(value) if name in NUMBERS else value
+    """Make the node in its namespace, with the parameters file and the non-empty arguments."""
+    def argument(name):
+        return LaunchConfiguration(name).perform(context)
+    parameters = {name: typed(name, argument(name)) for name in PARAMETERS if argument(name)}
+    files = [argument('params_file')] if argument('params_file') else []
+    namespace = argument('namespace')
+    view = PathJoinSubstitution([FindPackageShare('rigid_sim'), 'rviz', 'rigid_sim.rviz'])
+    # The view names /rigid_sim/<topic>; in a namespace the node publishes elsewhere.
+    prefix = f'/{namespace.strip("/")}/rigid_sim' if namespace.strip('/') else '/rigid_sim'
     return [Node(package='rigid_sim', executable='rigid_sim_node', name='rigid_sim',
-                 output='screen', parameters=[parameters])]
+                 namespace=namespace, output='screen', parameters=[*files, parameters]),
+            Node(package='rviz2', executable='rviz2', arguments=['-d', view],
+                 parameters=[{'use_sim_time': True}], output='screen',
+                 remappings=[(f'/rigid_sim/{topic}', f'{prefix}/{topic}') for topic in VIEWED],
+                 condition=IfCondition(LaunchConfiguration('rviz')))]
 
 
 def generate_launch_description():
     """Arguments, the simulator, and RViz when ``rviz:=true`` (on simulated time)."""
-    view = PathJoinSubstitution([FindPackageShare('rigid_sim'), 'rviz', 'rigid_sim.rviz'])
     return LaunchDescription([
         *(DeclareLaunchArgument(name, default_value=default, description=description)
           for name, (default, description) in ARGUMENTS.items()),
         OpaqueFunction(function=simulator),
-        Node(package='rviz2', executable='rviz2', arguments=['-d', view],
-             parameters=[{'use_sim_time': True}], output='screen',
-             condition=IfCondition(LaunchConfiguration('rviz'))),
     ])

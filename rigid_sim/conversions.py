@@ -13,7 +13,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, MagneticField
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rigid_sim.core import rotation
@@ -141,7 +141,7 @@ def static_transforms(bodies, frame_prefix, seconds):
     ----------
     bodies : sequence of BodySpec
         The scene's bodies; ``points`` maps a name to its (3,) position, m, body frame,
-        and ``imu`` is an ImuSpec or None.
+        and ``imus`` its ImuSpecs.
     frame_prefix : str
         Prefixed to every frame name.
     seconds : float
@@ -150,14 +150,14 @@ def static_transforms(bodies, frame_prefix, seconds):
     Returns
     -------
     list of TransformStamped
-        Parent ``<prefix><body>``, child ``<prefix><body>/<point>`` (``<prefix><body>/imu``
+        Parent ``<prefix><body>``, child ``<prefix><body>/<point>`` (``<prefix><body>/<name>``
         for an IMU placed by coordinates), identity rotation.
     """
     transforms = []
     for body in bodies:
         points = dict(body.points)
-        if body.imu is not None:
-            points.setdefault(body.imu.frame, body.imu.point)
+        for imu in body.imus:
+            points.setdefault(imu.frame, imu.point)
         for name, point in points.items():
             transform = TransformStamped(child_frame_id=f'{frame_prefix}{body.name}/{name}')
             transform.header.frame_id = frame_prefix + body.name
@@ -218,14 +218,30 @@ def imu_message(frame_id, spec):
     The angular velocity and linear acceleration covariances are diagonal: the variance of
     one reading's white noise (the bias is not white; it is what an estimator tracks). The
     orientation is exact: its covariance is zero, as for noise-free readings; sensor_msgs
-    reads an all-zero covariance as "unknown".
+    reads an all-zero covariance as "unknown". An IMU that publishes no orientation says so
+    as REP-145 asks: ``orientation_covariance[0] = -1`` (and the orientation stays zero).
     """
     message = Imu()
     message.header.frame_id = frame_id
     for covariance, noise in ((message.angular_velocity_covariance, spec.gyro),
                               (message.linear_acceleration_covariance, spec.accel)):
-        covariance[[0, 4, 8]] = 0.0 if noise is None else noise.variance
+        _set_variance(covariance, noise)
+    if not spec.orientation:
+        message.orientation_covariance[0] = -1.0
     return message
+
+
+def magnetic_field_message(frame_id, spec):
+    """Build a sensor_msgs/MagneticField in ``frame_id``, covariance from ``spec.mag``."""
+    message = MagneticField()
+    message.header.frame_id = frame_id
+    _set_variance(message.magnetic_field_covariance, spec.mag)
+    return message
+
+
+def _set_variance(covariance, noise):
+    """Diagonal of a 3x3 covariance: the white-noise variance (0: exact, or unknown)."""
+    covariance[[0, 4, 8]] = 0.0 if noise is None else noise.variance
 
 
 def fill_imu(message, readings, row):
@@ -235,6 +251,12 @@ def fill_imu(message, readings, row):
     q.x, q.y, q.z, q.w = readings.orientation[row].tolist()
     _set_vector(message.angular_velocity, readings.angular_velocity[row])
     _set_vector(message.linear_acceleration, readings.specific_force[row])
+
+
+def fill_magnetic_field(message, readings, row):
+    """Write row ``row`` of ``readings``' magnetic field into a MagneticField ``message``."""
+    to_time(readings.time, message.header.stamp)
+    _set_vector(message.magnetic_field, readings.magnetic_field[row])
 
 
 def _set_vector(vector, values):

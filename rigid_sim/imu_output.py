@@ -1,12 +1,14 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""The node's IMU output: ``~/<body>/imu`` for every body whose scene entry declares one.
+"""The node's IMU outputs: ``~/<body>/<name>`` for every IMU a scene declares.
 
-A scene without an IMU gets no publisher and costs one attribute test per tick. The
-readings are taken whenever an IMU is due, listened to or not, so that the noise an IMU
-draws does not depend on who subscribes: a seeded run reads the same whoever watches.
+An IMU's name is ``imu`` unless its scene entry gives one, so a body's single IMU publishes
+``~/<body>/imu``; an IMU with a magnetometer also publishes ``~/<body>/<name>/mag``. A
+scene without an IMU gets no publisher and costs one attribute test per tick. The readings
+are taken whenever an IMU is due, listened to or not, so that the noise an IMU draws does
+not depend on who subscribes: a seeded run reads the same whoever watches.
 """
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, MagneticField
 
 from rigid_sim import conversions
 from rigid_sim.core.imu import build_imus
@@ -31,31 +33,38 @@ class ImuOutputs:
     def __init__(self, node, scene, world, frame_prefix):
         self._node = node
         self.imus = None          # rigid_sim.core.imu.Imus, None when the scene has none
-        self._publishers = []     # per IMU
+        self._publishers = []     # per IMU: the Imu publisher, the MagneticField one or None
         self._names = []          # per IMU, the name of its body
-        self._messages = []       # per IMU, refilled at each reading
+        self._messages = []       # per IMU, as the publishers: refilled at each reading
         self.wire(scene, world, frame_prefix)
 
     def wire(self, scene, world, frame_prefix):
         """Replace the IMUs and publishers by those of ``scene``."""
-        for publisher in self._publishers:
+        for publisher in (p for pair in self._publishers for p in pair if p is not None):
             self._node.destroy_publisher(publisher)
         gravity = scene.effects.get('gravity', {}).get('acceleration')
-        self.imus = build_imus(scene.bodies, world.bodies, gravity)
+        self.imus = build_imus(scene.bodies, world.bodies, gravity, scene.magnetic_field)
         if self.imus is None:
             self._publishers, self._messages = [], []
             return
         self._names = [scene.bodies[index].name for index in self.imus.bodies]
         create = self._node.qos_overrides.create_publisher
-        self._publishers = [create(Imu, f'~/{name}/imu', QUEUE_DEPTH) for name in self._names]
+        self._publishers = [
+            (create(Imu, f'~/{body}/{spec.name}', QUEUE_DEPTH),
+             create(MagneticField, f'~/{body}/{spec.name}/mag', QUEUE_DEPTH)
+             if spec.magnetometer else None)
+            for body, spec in zip(self._names, self.imus.specs)]
         self.set_frame_prefix(frame_prefix)
 
     def set_frame_prefix(self, frame_prefix):
         """Rebuild the reused messages with IMU frames ``<prefix><body>/<frame>``."""
         if self.imus is not None:
-            self._messages = [conversions.imu_message(f'{frame_prefix}{name}/{spec.frame}',
-                                                      spec)
-                              for name, spec in zip(self._names, self.imus.specs)]
+            frames = [f'{frame_prefix}{name}/{spec.frame}'
+                      for name, spec in zip(self._names, self.imus.specs)]
+            self._messages = [
+                (conversions.imu_message(frame, spec),
+                 conversions.magnetic_field_message(frame, spec) if spec.magnetometer else None)
+                for frame, spec in zip(frames, self.imus.specs)]
 
     def restart(self):
         """Every IMU due again and its noise drawn anew from its seed (time went back to 0)."""
@@ -71,6 +80,9 @@ class ImuOutputs:
             return
         readings = self.imus.read(world, which)
         for row, k in enumerate(which):
-            message = self._messages[k]
+            (imu, magnetometer), (message, field) = self._publishers[k], self._messages[k]
             conversions.fill_imu(message, readings, row)
-            self._publishers[k].publish(message)
+            imu.publish(message)
+            if magnetometer is not None:
+                conversions.fill_magnetic_field(field, readings, row)
+                magnetometer.publish(field)

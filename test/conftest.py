@@ -1,11 +1,13 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""Isolation and harnesses for the tests that speak ROS.
+"""Isolation for the tests that speak ROS.
 
 Every run gets its own ROS_DOMAIN_ID (from the pid), discovery limited to this machine
 (docs/ros_notes.md: unset, DDS multicasts out of the network interface) and a temporary log
 directory, set here before any test starts rclpy or a node process. In-process tests narrow
-discovery further, to OFF. The harnesses themselves are in ``ros_harness.py``.
+discovery further, to OFF. The node is driven through the public test kit (the
+``rigid_sim`` fixture of rigid_sim.testing); ``ros_tools.py`` builds the messages a test's
+own node sends and reads what it heard.
 """
 import os
 import shutil
@@ -45,24 +47,3 @@ def write_scene(tmp_path):
         path.write_text(text)
         return str(path)
     return write
-
-
-@pytest.fixture
-def harness(ros_context):
-    """Start a rigid_sim node and a probe node in one executor.
-
-    The node's tick loop is stopped: the test advances it with ``tick()``, unless it asks
-    for ``harness(scene, ticking=True, **params)``.
-    """
-    from rigid_sim.executor import make_executor
-    from ros_harness import SimHarness
-    executor = make_executor(ros_context)
-    made = []
-
-    def start(scene, ticking=False, **params):
-        made.append(SimHarness(ros_context, executor, scene, params, ticking))
-        return made[-1]
-    yield start
-    for sim in made:
-        sim.destroy()
-    executor.shutdown()

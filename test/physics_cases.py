@@ -28,6 +28,18 @@ ORDER_ERROR_CONSTANT = 20.0
 FIXED_STEP = sorted(name for name, cls in REGISTRY.items() if not cls.adaptive)
 # Methods accurate enough for tight comparisons at dt = 1e-3: order >= 4 or error-controlled.
 ACCURATE = sorted(name for name, cls in REGISTRY.items() if cls.adaptive or cls.order >= 4)
+# One box in free flight, x = X0 + V0 t, for the lockstep tests over ROS (in the test kit
+# and as a process), stepped by FLIGHT_STEP, exact in binary: simulated times add up exactly.
+FLIGHT_STEP = 1 / 64
+FLIGHT_X0, FLIGHT_V0 = np.array([1.0, -2.0, 0.5]), np.array([0.5, 0.25, -1.0])
+FLYING_BOX = f"""
+bodies:
+  - name: box
+    shape: {{type: box, size: [0.4, 0.2, 0.1]}}
+    mass: 2.0
+    pose: {{position: {FLIGHT_X0.tolist()}}}
+    twist: {{linear: {FLIGHT_V0.tolist()}}}
+"""
 
 
 def make_bodies(mass, inertia, com_in_body=None):

@@ -11,8 +11,8 @@ from rigid_sim.core.scene import parse_scene
 def test_variants_put_an_imu_on_every_body_or_on_none():
     for variant, imu in VARIANTS.items():
         scene = parse_scene(yaml.safe_load(imu_scene(3, imu)))
-        assert [body.imu is not None for body in scene.bodies] == [imu is not None] * 3
-    noisy = parse_scene(yaml.safe_load(imu_scene(1, VARIANTS['noisy']))).bodies[0].imu
+        assert [len(body.imus) for body in scene.bodies] == [int(imu is not None)] * 3
+    noisy, = parse_scene(yaml.safe_load(imu_scene(1, VARIANTS['noisy']))).bodies[0].imus
     assert noisy.gyro.stddev > 0 and noisy.accel.dynamic_bias_stddev > 0
 
 

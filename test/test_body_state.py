@@ -16,6 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 from std_srvs.srv import SetBool
 
+import ros_tools
 from rigid_sim.core.body_state import UNIT_QUATERNION_TOLERANCE, with_pose, with_twist
 from rigid_sim.core.scene import build_world, parse_scene
 
@@ -132,12 +133,16 @@ def test_nearly_unit_quaternion_is_normalised(world):
 
 
 @pytest.fixture
-def paused(harness, write_scene):
-    """Run the scene over ROS, paused after two ticks (paused ticks apply inputs and publish)."""
-    sim = harness(write_scene(MESH_FREE), time_step=STEP, integrator='rk4')
-    sim.tick(2)
+def paused(rigid_sim):
+    """Run the scene over ROS, paused after two ticks (paused ticks apply inputs and publish).
+
+    As (simulation, probe).
+    """
+    sim = rigid_sim(yaml=MESH_FREE, time_step=STEP, integrator='rk4')
+    probe = ros_tools.Probe(sim, 'offset', 'ball')
+    sim.step(2)
     assert sim.call(SetBool, 'pause', SetBool.Request(data=True)).success
-    return sim
+    return sim, probe
 
 
 def test_set_pose_and_twist_over_ros_take_effect_at_the_next_tick(paused):
@@ -145,58 +150,62 @@ def test_set_pose_and_twist_over_ros_take_effect_at_the_next_tick(paused):
 
     Resumed, the ball (a sphere) flies on from them: p + v t, exp([omega] t) R.
     """
-    ball_before = paused.state('ball')
-    paused.set_pose('offset', *POSE)
-    paused.set_twist('ball', *TWIST)
-    paused.set_pose('ball', *POSE)
-    paused.tick(1)
-    position, orientation, velocity, angular_velocity, t = paused.state('offset')
+    sim, probe = paused
+    ball_before = probe.state('ball')
+    probe.send('offset', 'set_pose', ros_tools.pose(*POSE))
+    probe.send('ball', 'set_twist', ros_tools.twist(*TWIST))
+    probe.send('ball', 'set_pose', ros_tools.pose(*POSE))
+    sim.step(1)
+    position, orientation, velocity, angular_velocity, t = probe.state('offset')
     assert t == 2 * STEP
     np.testing.assert_allclose(position, POSE[0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(orientation, POSE[1], rtol=0, atol=1e-15)
-    position, orientation, velocity, angular_velocity, _ = paused.state('ball')
+    position, orientation, velocity, angular_velocity, _ = probe.state('ball')
     np.testing.assert_allclose(velocity, TWIST[0], rtol=0, atol=1e-14)
     np.testing.assert_allclose(angular_velocity, TWIST[1], rtol=0, atol=1e-14)
     assert ball_before[0].tolist() != position.tolist()
-    assert paused.call(SetBool, 'pause', SetBool.Request(data=False)).success
-    paused.tick(8)
-    position, orientation, _, _, t = paused.state('ball')
+    assert sim.call(SetBool, 'pause', SetBool.Request(data=False)).success
+    sim.step(8)
+    position, orientation, _, _, t = probe.state('ball')
     assert t == 10 * STEP
     np.testing.assert_allclose(position, POSE[0] + TWIST[0] * 8 * STEP, rtol=0, atol=1e-12)
     turned = Rotation.from_rotvec(TWIST[1] * 8 * STEP) * Rotation.from_quat(POSE[1])
     assert (Rotation.from_quat(orientation) * turned.inv()).magnitude() < 1e-9
 
 
-@pytest.mark.parametrize('send, reason', [
-    (lambda sim: sim.set_pose('offset', [math.nan, 0, 0], [0, 0, 0, 1]), 'non-finite'),
-    (lambda sim: sim.set_pose('offset', [0, 0, 0], [0, 0, 0.5, 0.5]), 'not a unit'),
-    (lambda sim: sim.set_pose('offset', [0, 0, 0], [0, 0, 0, 1], frame_id='offset'),
+@pytest.mark.parametrize('body, topic, message, reason', [
+    ('offset', 'set_pose', ros_tools.pose([math.nan, 0, 0], [0, 0, 0, 1]), 'non-finite'),
+    ('offset', 'set_pose', ros_tools.pose([0, 0, 0], [0, 0, 0.5, 0.5]), 'not a unit'),
+    ('offset', 'set_pose', ros_tools.pose([0, 0, 0], [0, 0, 0, 1], frame_id='offset'),
      'unknown frame_id'),
-    (lambda sim: sim.set_twist('offset', [0, 0, 0], [0, 0, 0], frame_id=''), 'unknown frame_id'),
-    (lambda sim: sim.set_twist('offset', [0, math.inf, 0], [0, 0, 0]), 'non-finite'),
-    (lambda sim: sim.set_twist('offset', [1e308, 0, 0], [0, 0, 0]), 'linear.x is 1e+308'),
-    (lambda sim: sim.set_twist('offset', [0, 0, 0], [1e200, 0, 0]), 'angular.x is 1e+200'),
-    (lambda sim: sim.set_pose('offset', [0, 0, 5e-324], [0, 0, 0, 1]),
+    ('offset', 'set_twist', ros_tools.twist([0, 0, 0], [0, 0, 0], frame_id=''),
+     'unknown frame_id'),
+    ('offset', 'set_twist', ros_tools.twist([0, math.inf, 0], [0, 0, 0]), 'non-finite'),
+    ('offset', 'set_twist', ros_tools.twist([1e308, 0, 0], [0, 0, 0]), 'linear.x is 1e+308'),
+    ('offset', 'set_twist', ros_tools.twist([0, 0, 0], [1e200, 0, 0]), 'angular.x is 1e+200'),
+    ('offset', 'set_pose', ros_tools.pose([0, 0, 5e-324], [0, 0, 0, 1]),
      'position.z is 4.94e-324, a subnormal number: write floats (15.0)'),
-    (lambda sim: sim.set_pose('offset', [0, 0, 0], [0, 0, 0, 1], frame_id='x' * 100_000),
+    ('offset', 'set_pose', ros_tools.pose([0, 0, 0], [0, 0, 0, 1], frame_id='x' * 100_000),
      "unknown frame_id 'xxxx"),
-    (lambda sim: sim.set_twist('offset', [0, 0, 0], [0, 0, 0], frame_id='x' * 100_000),
+    ('offset', 'set_twist', ros_tools.twist([0, 0, 0], [0, 0, 0], frame_id='x' * 100_000),
      '...(100002 characters)...'),
 ])
-def test_refused_state_over_ros_changes_nothing_and_is_counted(paused, send, reason):
+def test_refused_state_over_ros_changes_nothing_and_is_counted(paused, body, topic, message,
+                                                               reason):
     """A refused set_pose or set_twist changes no body, is counted and named, quoted short.
 
     Nothing non-finite is published after it: the bodies keep the state they had.
     """
-    before = [paused.state(name) for name in ('offset', 'ball')]
-    send(paused)
-    paused.tick(3)
+    sim, probe = paused
+    before = [probe.state(name) for name in ('offset', 'ball')]
+    probe.send(body, topic, message)
+    sim.step(3)
     for name, state in zip(('offset', 'ball'), before):
-        for now, then in zip(paused.state(name), state):
+        for now, then in zip(probe.state(name), state):
             np.testing.assert_array_equal(now, then)
-    twists = paused.received[paused.topic('offset/twist')]
+    twists = probe.heard['offset/twist']
     assert all(np.isfinite([t.twist.linear.x, t.twist.angular.x]).all() for t in twists)
-    values = paused.diagnostics()
+    values = probe.diagnostics.values()
     assert values['refused inputs offset'] == '1' and values['refused inputs'] == '1'
     assert reason in values['last refused input']
     assert values['last refused input'].startswith('~/offset/set_')

@@ -17,11 +17,15 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from rcl_interfaces.srv import GetParameters
-from ros_harness import spin_until
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from ros_tools import spin_until
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_sim.deferred import REQUEST_QUEUE_DEPTH, SERVICE_QOS
 from rigid_sim.diagnostics_window import health, STALL_PERIODS, TickStats
+from rigid_sim.executor import make_executor
+from rigid_sim.node import RigidSimNode
 
 BODIES = 'bodies:\n' + ''.join(
     f'  - {{name: b{i}, shape: {{type: box, size: [0.1, 0.2, 0.3]}}, mass: 1.0, '
@@ -30,76 +34,92 @@ BODIES = 'bodies:\n' + ''.join(
 LONG_STEP = 10_000   # ticks; with 50 substeps of 20 bodies, seconds of work
 
 
-def call_async(sim, kind, name, request):
-    """Send ``request`` to the node's service ``name``; the future of its answer."""
-    client = sim.probe.create_client(kind, sim.topic(name), qos_profile=SERVICE_QOS)
+def call_async(sim, client_node, kind, name, request):
+    """Send ``request`` to the simulator's service ``name``; the future of its answer."""
+    client = client_node.create_client(kind, sim.topic(name), qos_profile=SERVICE_QOS)
     spin_until(sim.executor, client.service_is_ready, what=f'service {name}')
     return client.call_async(request)
 
 
-def test_pause_is_answered_during_a_long_step_and_ends_it_saying_how_many_ticks_ran(
-        harness, write_scene):
+def test_pause_is_answered_during_a_long_step_and_ends_it_saying_how_many_ticks_ran(rigid_sim):
     """A ``~/pause`` sent while a 10 000-tick step runs is answered, and ends the step.
 
     The step's answer counts the ticks that ran, fewer than asked (a step that blocked the
     executor would run all of them before the pause is even read), and the simulated time
     says the same.
     """
-    sim = harness(write_scene(BODIES), ticking=True, rate=0, start_paused=True,
-                  step_ticks=LONG_STEP, substeps=50, time_step=0.001)
-    step = call_async(sim, Trigger, 'step', Trigger.Request())
-    spin_until(sim.executor, lambda: sim.sim.ticks > 0, what='the step started')
-    pause = call_async(sim, SetBool, 'pause', SetBool.Request(data=True))
+    sim = rigid_sim(yaml=BODIES, start_paused=True, step_ticks=LONG_STEP, substeps=50,
+                    time_step=0.001)
+    client = sim.create_node('client')
+    step = call_async(sim, client, Trigger, 'step', Trigger.Request())
+    spin_until(sim.executor, lambda: sim.node.ticks > 0, what='the step started')
+    pause = call_async(sim, client, SetBool, 'pause', SetBool.Request(data=True))
     spin_until(sim.executor, pause.done, what='pause answered')
     spin_until(sim.executor, step.done, what='step answered')
     answer = step.result()
     ran = int(answer.message.split()[1])
     assert not answer.success and '~/pause' in answer.message
     assert 0 < ran < LONG_STEP
-    assert abs(sim.sim.world.time - ran * 0.001) < 1e-9
+    assert abs(sim.time - ran * 0.001) < 1e-9
 
 
-def test_a_burst_of_a_thousand_step_calls_is_answered_in_full(harness, write_scene):
+def test_a_burst_of_a_thousand_step_calls_is_answered_in_full(rigid_sim):
     """1000 ``~/step`` calls sent at once: 1000 answers, 1000 ticks of simulated time."""
-    sim = harness(write_scene(BODIES), ticking=True, rate=0, start_paused=True,
-                  time_step=0.001)
-    client = sim.probe.create_client(Trigger, sim.topic('step'), qos_profile=SERVICE_QOS)
+    sim = rigid_sim(yaml=BODIES, start_paused=True, time_step=0.001)
+    client = sim.create_node('client').create_client(Trigger, sim.topic('step'),
+                                                     qos_profile=SERVICE_QOS)
     spin_until(sim.executor, client.service_is_ready, what='service step')
     calls = [client.call_async(Trigger.Request()) for _ in range(REQUEST_QUEUE_DEPTH)]
     spin_until(sim.executor, lambda: all(call.done() for call in calls),
                what='every step answered', timeout=120.0)
     assert all(call.result().success for call in calls)
-    assert abs(sim.sim.world.time - REQUEST_QUEUE_DEPTH * 0.001) < 1e-9
+    assert abs(sim.time - REQUEST_QUEUE_DEPTH * 0.001) < 1e-9
 
 
-def test_the_clock_and_parameters_go_on_while_a_change_is_prepared(harness, write_scene):
+def test_the_clock_and_parameters_go_on_while_a_change_is_prepared(
+        rigid_sim_context, write_scene):
     """An integrator change whose preparation (compiling) blocks: ticks and calls go on.
 
-    Once the preparation ends, the new integrator is swapped in between two ticks.
+    Once the preparation ends, the new integrator is swapped in between two ticks. The node
+    runs on its own wall-clock loop here, which the test kit stops.
     """
-    sim = harness(write_scene(BODIES), ticking=True, rate=200.0)
+    node = RigidSimNode(context=rigid_sim_context, parameter_overrides=[
+        Parameter('scene', value=write_scene(BODIES)), Parameter('rate', value=200.0)])
+    client = Node('client', context=rigid_sim_context)
+    executor = make_executor(rigid_sim_context)
+    executor.add_node(node)
+    executor.add_node(client)
+    try:
+        _prepare_while_ticking(node, client, executor)
+    finally:
+        for each in (node, client):
+            executor.remove_node(each)
+            each.destroy_node()
+
+
+def _prepare_while_ticking(node, client, executor):
     release = threading.Event()
-    prepare = sim.sim.prepare
+    prepare = node.prepare
 
     def slow_prepare(settings, scene_changed):
         release.wait(60.0)   # a compile that takes as long as the test wants
         return prepare(settings, scene_changed)
 
-    sim.sim.prepare = slow_prepare
-    from rclpy.parameter import Parameter
-    assert sim.sim.set_parameters([Parameter('integrator', value='rk4')])[0].successful
-    ticks = sim.sim.ticks
-    spin_until(sim.executor, lambda: sim.sim.ticks > ticks + 20, what='ticks while preparing')
-    asked = call_async(sim, GetParameters, 'get_parameters',
-                       GetParameters.Request(names=['integrator']))
-    spin_until(sim.executor, asked.done, what='parameters answered while preparing')
+    node.prepare = slow_prepare
+    assert node.set_parameters([Parameter('integrator', value='rk4')])[0].successful
+    ticks = node.ticks
+    spin_until(executor, lambda: node.ticks > ticks + 20, what='ticks while preparing')
+    asker = client.create_client(GetParameters, '/rigid_sim/get_parameters')
+    spin_until(executor, asker.service_is_ready, what='parameter service')
+    asked = asker.call_async(GetParameters.Request(names=['integrator']))
+    spin_until(executor, asked.done, what='parameters answered while preparing')
     assert asked.result().values[0].string_value == 'rk4'
-    assert sim.sim.world.integrator.name == 'exact_split'   # still the running one
-    assert sim.diagnostics()['preparing a change'] == 'True'
+    assert node.world.integrator.name == 'exact_split'   # still the running one
+    assert node.reconfiguration.preparing
     release.set()
-    spin_until(sim.executor, lambda: sim.sim.world.integrator.name == 'rk4',
+    spin_until(executor, lambda: node.world.integrator.name == 'rk4',
                what='the prepared integrator swapped in')
-    assert sim.sim.settings.integrator == 'rk4'
+    assert node.settings.integrator == 'rk4'
 
 
 def test_diagnostics_are_an_error_when_no_tick_ran_for_two_periods():

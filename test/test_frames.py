@@ -8,14 +8,12 @@ wrapping into a TFMessage is the one untested line); the node is checked to run 
 import numpy as np
 import pytest
 import yaml
-from scipy.spatial.transform import Rotation
-from std_srvs.srv import SetBool
 from visualization_msgs.msg import Marker
 
+import ros_tools
 from rigid_sim import conversions
 from rigid_sim.core.scene import build_world, parse_scene
 from rigid_sim.node import RigidSimNode
-from ros_harness import spin_until
 
 SCENE = """
 bodies:
@@ -84,43 +82,54 @@ def test_node_runs_without_tf2_msgs_and_says_so_once(ros_context, write_scene, c
     node.destroy_node()
 
 
-def test_frame_prefix_names_frames_in_messages_and_wrenches_may_use_it(harness, write_scene):
+def test_frame_prefix_names_frames_in_messages_and_wrenches_may_use_it(rigid_sim):
     """Odometry child and IMU frames carry the prefix, and wrench frames may use it.
 
-    A wrench at 'sim1/box/thruster' acts at the thruster: a body-axes force f at
-    p = (-0.2, 0, 0) gives torque p x f about z.
+    A body-axes force f = (0, 1, 0) N at 'sim1/box/thruster', p = (-0.2, 0, 0), acts at the
+    thruster: paused, the box's IMU at r = (0.1, 0.05, 0) reads the specific force
+    f / m + alpha x r + omega x (omega x r) with alpha = I^-1 (p x f) (the spin (0, 0, 1)
+    is about a principal axis: no gyroscopic term), all in box axes.
     """
-    sim = harness(write_scene(SCENE), frame_prefix='sim1/', time_step=1 / 64,
-                  wrench_timeout=0.0)
-    assert sim.call(SetBool, 'pause', SetBool.Request(data=True)).success
-    sim.push('box', 'sim1/box/thruster', [0.0, 1.0, 0.0])
-    sim.tick(1)
-    assert sim.latest('box/odom').child_frame_id == 'sim1/box'
-    world_torque, = sim.sim.world.net_wrench()[1][:1]
-    turn = Rotation.from_quat([0.0, 0.0, 0.38268343, 0.92387953])
-    np.testing.assert_allclose(world_torque, turn.apply(np.cross([-0.2, 0, 0], [0, 1, 0])),
-                               atol=1e-12)
-    assert sim.diagnostics()['refused inputs'] == '0'
+    sim = rigid_sim(yaml=SCENE, frame_prefix='sim1/', time_step=1 / 64, wrench_timeout=0.0)
+    probe = ros_tools.Probe(sim, 'box')
+    sim.pause()
+    probe.push('box', 'sim1/box/thruster', [0.0, 1.0, 0.0])
+    sim.step(1)
+    assert probe.latest('box/odom').child_frame_id == 'sim1/box'
+    reading = sim.imu('box')
+    assert reading.frame_id == 'sim1/box/imu'
+    properties = sim.properties('box')
+    lever, force, spin = np.array([0.1, 0.05, 0.0]), np.array([0.0, 1.0, 0.0]), [0, 0, 1.0]
+    alpha = np.linalg.solve(properties.inertia, np.cross([-0.2, 0.0, 0.0], force))
+    expected = (force / properties.mass + np.cross(alpha, lever)
+                + np.cross(spin, np.cross(spin, lever)))
+    np.testing.assert_allclose(reading.linear_acceleration, expected, rtol=0, atol=1e-12)
+    assert probe.diagnostics.values()['refused inputs'] == '0'
 
 
 @pytest.mark.parametrize('prefix', ['/sim1/', 'sim 1', 'a//b'])
-def test_bad_frame_prefix_is_refused(harness, write_scene, prefix):
-    sim = harness(write_scene(SCENE))
+def test_bad_frame_prefix_is_refused(rigid_sim, prefix):
+    """Refused with the reason; the parameter and the published frames stay as they were."""
+    sim = rigid_sim(yaml=SCENE)
+    probe = ros_tools.Probe(sim, 'box')
     result, = sim.set_parameters(frame_prefix=prefix)
     assert not result.successful and 'frame_prefix' in result.reason
-    assert sim.sim.settings.frame_prefix == ''
+    assert sim.node.get_parameter('frame_prefix').value == ''
+    sim.step(1)
+    assert probe.latest('box/odom').child_frame_id == 'box'
+    assert sim.imu('box').frame_id == 'box/imu'
 
 
-def test_scene_reload_clears_the_old_markers_first(harness, write_scene):
+def test_scene_reload_clears_the_old_markers_first(rigid_sim, write_scene):
     """A reload sends one DELETEALL marker, then the new scene's markers."""
-    sim = harness(write_scene(SCENE))
-    sim.tick(1)
+    sim = rigid_sim(yaml=SCENE)
+    probe = ros_tools.Probe(sim)
+    sim.step(1)
     one_body = write_scene('bodies:\n  - {name: cube, shape: {type: box, size: [1, 1, 1]}, '
                            'mass: 1.0}\n', 'one.yaml')
-    markers = sim.received[sim.topic('markers')]
+    markers = probe.heard['markers']
     assert sim.set_parameters(scene=one_body)[0].successful
-    spin_until(sim.executor, lambda: len(markers) == 2, what='markers cleared')
+    assert len(markers) == 2   # delivered before set_parameters returns
     assert [m.action for m in markers[1].markers] == [Marker.DELETEALL]
-    sim.listen()
-    sim.tick(1)
+    sim.step(1)
     assert [m.ns for m in markers[-1].markers] == ['cube']

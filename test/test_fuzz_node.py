@@ -2,10 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Fuzzing the running node: garbage on every input topic and service, random parameters.
 
-One node takes every example of a test, over ROS from a probe node: after each, the node
-still ticks, its state is finite, and each input was either applied or refused with a short
-reason and counted. Which wrenches must be refused is worked out here from the contract
-(frames, finiteness, subnormal components, the scene's limits), not asked of the node.
+One node (started by the test kit) takes every example of a test, over ROS from a probe
+node: after each, the node still ticks, its state is finite, and each input was either
+applied or refused with a short reason and counted. Which wrenches must be refused is
+worked out here from the contract (frames, finiteness, subnormal components, the scene's
+limits), not asked of the node.
 """
 import math
 
@@ -15,6 +16,7 @@ from rcl_interfaces.srv import SetParameters
 from rclpy.parameter import Parameter
 from std_srvs.srv import SetBool, Trigger
 
+import ros_tools
 from fuzzing import fuzz
 from rigid_sim.parameters import SPECS
 
@@ -55,47 +57,50 @@ def acceptable(body, frame_id, force, torque):
             and math.hypot(*torque) <= MAX_TORQUE)
 
 
-def started(harness, write_scene):
-    """Return the one node of this test, started at its first example."""
-    if not hasattr(harness, 'sim'):
-        harness.sim = harness(write_scene(SCENE), time_step=0.125)
-    return harness.sim
+def started(rigid_sim):
+    """Return the one simulation of this test and its probe, started at its first example."""
+    if not hasattr(rigid_sim, 'started'):
+        sim = rigid_sim(yaml=SCENE, time_step=0.125)
+        rigid_sim.started = sim, ros_tools.Probe(sim, 'box', 'rod')
+    return rigid_sim.started
 
 
-def assert_alive_and_finite(sim):
+def assert_alive_and_finite(sim, probe):
     """Check that a tick goes through and all the node holds and publishes is finite."""
-    before = sim.sim.world.time
-    sim.tick()
-    assert np.all(np.isfinite(sim.sim.world.y)) and math.isfinite(sim.sim.world.energy())
-    assert sim.sim.world.time > before or sim.sim.paused
+    world = sim.node.world
+    before = sim.time
+    sim.step(1)
+    assert np.all(np.isfinite(world.y)) and math.isfinite(world.energy())
+    assert sim.time > before or sim.node.paused
     for body in ('box', 'rod'):
-        assert all(np.all(np.isfinite(part)) for part in sim.state(body)[:4])
+        assert all(np.all(np.isfinite(part)) for part in probe.state(body)[:4])
 
 
 @fuzz(60)
 @given(actions=ACTIONS)
-def test_garbage_on_every_input_is_applied_or_refused_with_a_reason(harness, write_scene,
-                                                                    actions):
-    sim = started(harness, write_scene)
+def test_garbage_on_every_input_is_applied_or_refused_with_a_reason(rigid_sim, actions):
+    sim, probe = started(rigid_sim)
     for action in actions:
         if action[0] == 'wrench':
             _, body, frame_id, force, torque = action
-            refused = dict(sim.sim.inputs.refusals.counts)
-            sim.push(body, frame_id, force, torque)
-            sim.tick()
-            now_refused = sim.sim.inputs.refusals.counts[body] - refused[body]
+            key = f'refused inputs {body}'   # listed once the body has any
+            refused = int(probe.diagnostics.values().get(key, 0))
+            probe.push(body, frame_id, force, torque)
+            sim.step(1)
+            values = probe.diagnostics.values()
+            now_refused = int(values.get(key, 0)) - refused
             assert now_refused == (0 if acceptable(body, frame_id, force, torque) else 1), \
-                sim.sim.inputs.refusals.last
+                values['last refused input']
             if now_refused:
-                reason = sim.diagnostics()['last refused input']
+                reason = values['last refused input']
                 assert reason.startswith(f'~/{body}/wrench: ') and len(reason) < 1000
         elif action[0] == 'pause':
             response = sim.call(SetBool, 'pause', SetBool.Request(data=action[1]))
-            assert response.success and sim.sim.paused is action[1]
+            assert response.success and sim.node.paused is action[1]
         else:
             assert sim.call(Trigger, 'reset', Trigger.Request()).success
-            assert sim.sim.world.time == 0.0
-        assert_alive_and_finite(sim)
+            assert sim.time == 0.0
+        assert_alive_and_finite(sim, probe)
 
 
 NAMES = st.sampled_from(sorted(SPECS) + ['use_sim_time', 'rat', 'x' * 300])
@@ -109,10 +114,9 @@ PARAMETER_SETS = st.lists(st.tuples(NAMES, PARAMETER_VALUES), min_size=1, max_si
 
 @fuzz(60)
 @given(changes=PARAMETER_SETS)
-def test_random_parameter_sets_are_taken_or_refused_with_a_reason(harness, write_scene,
-                                                                  changes):
+def test_random_parameter_sets_are_taken_or_refused_with_a_reason(rigid_sim, changes):
     """Over the set_parameters service, as any client on the graph could send them."""
-    sim = started(harness, write_scene)
+    sim, _ = started(rigid_sim)
     request = SetParameters.Request(parameters=[
         Parameter(name, value=value).to_parameter_msg() for name, value in changes])
     results = sim.call(SetParameters, 'set_parameters', request).results
@@ -121,10 +125,10 @@ def test_random_parameter_sets_are_taken_or_refused_with_a_reason(harness, write
         if result.successful:
             assert name in SPECS or name == 'use_sim_time'
             if name in SPECS:
-                assert getattr(sim.sim.settings, name) == value
+                assert getattr(sim.node.settings, name) == value
         else:
             assert result.reason and len(result.reason) < 3000
-    before = sim.sim.world.time
-    sim.sim.tick()
-    world = sim.sim.world
+    before = sim.time
+    sim.step(1)
+    world = sim.node.world
     assert np.all(np.isfinite(world.y)) and (world.time > before or world.time == 0.0)

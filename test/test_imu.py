@@ -8,19 +8,22 @@ omega about a principal axis reads omega^2 r towards the axis at distance r, a t
 on a body at rest reads alpha x r with alpha = I^-1 tau.
 """
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import yaml
 from scipy.spatial.transform import Rotation
-from sensor_msgs.msg import Imu
+from geometry_msgs.msg import WrenchStamped
+from sensor_msgs.msg import Imu, MagneticField
+
+import ros_tools
 
 from rigid_sim import conversions
 from rigid_sim.core.imu import build_imus
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
 from rigid_sim.inputs import held_wrenches
-from ros_harness import spin_until
 
 G = np.array([0.0, 0.0, -9.81])   # m/s^2
 MASS, SIZE = 2.0, np.array([0.4, 0.2, 0.1])
@@ -30,10 +33,10 @@ TILT = Rotation.from_rotvec([0.4, -0.7, 1.1])
 OFFSET = np.array([0.15, -0.05, 0.02])   # m, body frame: the IMU's point, off the centre
 
 
-def scene(imu='{point: [0.15, -0.05, 0.02]}', gravity=True, twist='{}', extra=''):
+def scene(imu='{point: [0.15, -0.05, 0.02]}', gravity=True, twist='{}', extra='', field=''):
     effects = f'effects: {{gravity: {{acceleration: {G.tolist()}}}}}\n' if gravity else ''
     return parse_scene(yaml.safe_load(f"""
-{effects}bodies:
+{effects}{field}bodies:
   - name: box
     shape: {{type: box, size: {SIZE.tolist()}}}
     mass: {MASS}
@@ -108,8 +111,9 @@ def test_named_point_and_readings_on_the_imu_grid_of_simulated_time():
     assert read_at == expected
 
 
-NOISY = ('{point: [0.0, 0.0, 0.0], seed: %d, noise: {gyro: {stddev: 0.01, bias_mean: 0.2, '
-         'bias_stddev: 0.0}, accel: {stddev: 0.0, dynamic_bias_stddev: 0.3}}}')
+GYRO_ACCEL = ('gyro: {stddev: 0.01, bias_mean: 0.2, bias_stddev: 0.0}, '
+              'accel: {stddev: 0.0, dynamic_bias_stddev: 0.3}')
+NOISY = '{point: [0.0, 0.0, 0.0], seed: %d, noise: {' + GYRO_ACCEL + '}}'
 
 
 def noisy_readings(seed, count, dt):
@@ -165,14 +169,98 @@ def test_same_seed_same_noise_other_seed_other_noise():
     ('{seed: 1180591620717411303424}', 'bodies[0].imu.seed', 'at most 1e+15'),   # 2**70
     ('{noise: {gyro: {stdev: 0.1}}}', 'bodies[0].imu.noise.gyro.stdev', 'unknown key'),
     ('{noise: {accel: {stddev: -0.1}}}', 'bodies[0].imu.noise.accel.stddev', 'non-negative'),
+    ('{orientation: 0}', 'bodies[0].imu.orientation', 'true or false'),
+    ('{magnetometer: true}', 'bodies[0].imu.magnetometer', 'no magnetic_field'),
+    ('{noise: {mag: {stddev: 1.0e-7}}}', 'bodies[0].imu.noise.mag', 'magnetometer: true'),
+    ('[]', 'bodies[0].imu', 'non-empty list'),
+    ('[{point: [0, 0, 0]}, {point: [0.1, 0, 0]}]', 'bodies[0].imu[1].name',
+     "duplicate IMU name 'imu' (also bodies[0].imu[0])"),
+    ('[{name: a}, {name: odom}]', 'bodies[0].imu[1].name', "'odom' is the topic"),
+    ('{name: tip, point: [0.1, 0.0, 0.0]}', 'bodies[0].imu.point', "point named 'tip'"),
 ])
 def test_bad_imu_entries_are_refused_naming_the_key(imu, key, reason):
     with pytest.raises(SceneError) as refused:
-        scene(imu)
+        scene(imu, extra='    points: {tip: [0.2, 0.0, 0.0]}')
     assert refused.value.key == key and reason in refused.value.reason
 
 
-def test_imu_topic_over_ros(harness, write_scene):
+FIELD = np.array([2.1e-5, -0.4e-5, -4.3e-5])   # T, world axes, about the Earth's
+MAGNETIC = f'magnetic_field: [{", ".join(f"{b:.2e}" for b in FIELD)}]\n'   # 1.0e-5: floats
+
+
+def test_magnetometer_reads_the_field_in_the_body_axes_as_the_body_turns():
+    """A body turned by TILT reads R^T B; spun at omega about a principal axis it reads R(t)^T B.
+
+    The spin about body z is torque-free and steady: R(t) = TILT exp(omega t z).
+    """
+    omega, steps, dt = 3.0, 40, 1e-3
+    spin = TILT.apply([0.0, 0.0, omega]).tolist()
+    spec = scene('{magnetometer: true}', gravity=False, twist=f'{{angular: {spin}}}',
+                 extra='', field=MAGNETIC)
+    world = build_world(spec, 'rk4')
+    imus = build_imus(spec.bodies, world.bodies, None, spec.magnetic_field)
+    np.testing.assert_allclose(imus.read(world, [0]).magnetic_field[0],
+                               TILT.inv().apply(FIELD), rtol=0, atol=1e-18)
+    for _ in range(steps):
+        assert world.step(dt)
+    turned = TILT * Rotation.from_rotvec([0.0, 0.0, omega * steps * dt])
+    np.testing.assert_allclose(imus.read(world, [0]).magnetic_field[0],
+                               turned.inv().apply(FIELD), rtol=0, atol=1e-15)
+
+
+def test_magnetometer_noise_has_its_mean_and_spread_and_leaves_the_other_streams_alone():
+    """Magnetometer white noise N(bias, sigma^2) within sampling bounds, as the gyro's.
+
+    Adding a magnetometer draws from a stream of its own: the gyro and accelerometer read
+    bit for bit what they read without it.
+    """
+    sigma, bias = 2.0e-7, 5.0e-7
+    spec = scene('{point: [0.0, 0.0, 0.0], seed: 1, magnetometer: true, noise: {'
+                 f'{GYRO_ACCEL}, mag: {{stddev: {sigma:.1e}, bias_mean: {bias:.1e}}}}}}}',
+                 gravity=False, field=MAGNETIC)
+    world = build_world(spec, 'rk4')
+    imus = build_imus(spec.bodies, world.bodies, None, spec.magnetic_field)
+    exact = TILT.inv().apply(FIELD)
+    fields, gyro = [], []
+    for k in range(4000):
+        readings = imus.read(SimpleNamespace(y=world.y, time=k * 0.01,
+                                             net_wrench=world.net_wrench), [0])
+        fields.append(readings.magnetic_field[0] - exact)
+        gyro.append(readings.angular_velocity[0].copy())
+    errors = np.array(fields)
+    n = errors.size
+    assert abs(errors.mean() - bias) < 5 * sigma / math.sqrt(n)
+    assert abs(errors.std(ddof=1) - sigma) < 5 * sigma / math.sqrt(2 * n)
+    np.testing.assert_array_equal(np.array(gyro), noisy_readings(1, 4000, 0.01)[0])
+
+
+def test_imus_of_a_list_read_at_their_own_points_and_draw_their_own_noise():
+    """Two IMUs on one spinning body read -omega^2 (x, y, 0) each at its own point.
+
+    With the same seed and noise they still draw independent noise: the first draws what a
+    single IMU of that seed draws, the second something else.
+    """
+    omega = 5.0
+    spin = TILT.apply([0.0, 0.0, omega]).tolist()
+    spec = scene('[{point: [0.15, -0.05, 0.02]}, {name: tip, point: [-0.1, 0.2, 0.0], '
+                 'orientation: false}]', gravity=False, twist=f'{{angular: {spin}}}')
+    names = [(imu.name, imu.frame) for imu in spec.bodies[0].imus]
+    assert names == [('imu', 'imu'), ('tip', 'tip')]
+    _, readings = read(spec, steps=37)
+    np.testing.assert_allclose(readings.specific_force, -omega ** 2 * np.array(
+        [[0.15, -0.05, 0.0], [-0.1, 0.2, 0.0]]), atol=1e-11)
+    np.testing.assert_allclose(readings.orientation[0], (TILT * Rotation.from_rotvec(
+        [0.0, 0.0, omega * 0.037])).as_quat(), atol=1e-9)
+    np.testing.assert_array_equal(readings.orientation[1], 0.0)   # it publishes none
+    twins = scene('[%s, %s]' % (NOISY % 4, (NOISY % 4)[:-1] + ', name: twin}'), gravity=False)
+    world = build_world(twins, 'rk4')
+    both = build_imus(twins.bodies, world.bodies, None).read(world, [0, 1]).angular_velocity
+    alone = noisy_readings(4, 1, 0.01)[0][0]
+    np.testing.assert_array_equal(both[0], alone)
+    assert not np.array_equal(both[1], alone)
+
+
+def test_imu_topic_over_ros(rigid_sim):
     """The ~/box/imu topic carries frame, stamps, covariances and readings as specified.
 
     Frame box/imu, stamps of simulated time, covariances from the noise model, and a body
@@ -190,14 +278,15 @@ bodies:
     shape: {{type: sphere, radius: 0.1}}
     mass: 1.0
 """
-    sim = harness(write_scene(text), time_step=1 / 64, wrench_timeout=0.0)
+    sim = rigid_sim(yaml=text, time_step=1 / 64, wrench_timeout=0.0)
+    probe = sim.create_node('probe')
     readings = []
-    sim.probe.create_subscription(Imu, sim.topic('box/imu'), readings.append, 100)
-    spin_until(sim.executor, lambda: sim.sim.count_subscribers(sim.topic('box/imu')) >= 1)
-    assert sim.sim.count_publishers(sim.topic('plain/imu')) == 0
-    sim.push('box', 'world', -MASS * G)
-    sim.tick(3)
-    spin_until(sim.executor, lambda: len(readings) == 3, what='three IMU readings')
+    probe.create_subscription(Imu, sim.topic('box/imu'), readings.append, 100)
+    push = probe.create_publisher(WrenchStamped, sim.topic('box/wrench'), 10)
+    sim.connect()
+    assert sim.node.count_publishers(sim.topic('plain/imu')) == 0
+    push.publish(ros_tools.wrench('world', -MASS * G))
+    sim.step(3)
     assert [conversions.to_seconds(m.header.stamp) for m in readings] == [1 / 64, 2 / 64, 3 / 64]
     last = readings[-1]
     assert last.header.frame_id == 'box/imu'
@@ -206,8 +295,50 @@ bodies:
     np.testing.assert_array_equal(last.angular_velocity_covariance,
                                   np.diag([0.25] * 3).ravel())
     np.testing.assert_array_equal(last.linear_acceleration_covariance, 0.0)
+    np.testing.assert_array_equal(last.orientation_covariance, 0.0)
     np.testing.assert_allclose([last.orientation.x, last.orientation.y, last.orientation.z,
                                 last.orientation.w], TILT.as_quat(), atol=1e-15)
+
+
+def test_several_imus_a_magnetometer_and_no_orientation_over_ros(rigid_sim):
+    """Each IMU of a list publishes on ~/<body>/<name>, a magnetometer on ~/<body>/<name>/mag.
+
+    The one without orientation sends a zero quaternion with orientation_covariance[0] = -1
+    (REP-145); the magnetometer reads R^T B with its noise variance on the diagonal.
+    """
+    sigma = 1.0e-7
+    text = f"""
+{MAGNETIC}bodies:
+  - name: box
+    shape: {{type: box, size: {SIZE.tolist()}}}
+    mass: {MASS}
+    pose: {{orientation: {TILT.as_quat().tolist()}}}
+    points: {{tip: [0.2, 0.0, 0.0]}}
+    imu:
+      - {{point: {OFFSET.tolist()}, magnetometer: true, noise: {{mag: {{stddev: {sigma}}}}}}}
+      - {{name: blind, point: tip, orientation: false, rate: 32.0}}
+"""
+    sim = rigid_sim(yaml=text, time_step=1 / 64)
+    probe = sim.create_node('probe')
+    fields, blind = [], []
+    probe.create_subscription(MagneticField, sim.topic('box/imu/mag'), fields.append, 100)
+    probe.create_subscription(Imu, sim.topic('box/blind'), blind.append, 100)
+    sim.step(4)
+    # At 32 Hz: the first tick at or after t = 0, 1/32 and 2/32 s (the first tick ends at 1/64).
+    assert [conversions.to_seconds(m.header.stamp) for m in blind] == [1 / 64, 1 / 32, 2 / 32]
+    assert blind[-1].header.frame_id == 'box/tip'
+    assert blind[-1].orientation_covariance[0] == -1.0
+    orientation = blind[-1].orientation
+    assert (orientation.x, orientation.y, orientation.z, orientation.w) == (0.0, 0.0, 0.0, 0.0)
+    assert len(fields) == 4 and fields[-1].header.frame_id == 'box/imu'
+    np.testing.assert_allclose(fields[-1].magnetic_field_covariance,
+                               np.diag([sigma ** 2] * 3).ravel(), rtol=1e-15)
+    error = conversions.vector_array(fields[-1].magnetic_field) - TILT.inv().apply(FIELD)
+    assert 0.0 < np.abs(error).max() < 6 * sigma   # noisy, within six standard deviations
+    reading = sim.imu('box')
+    assert reading.magnetic_field.tolist() == conversions.vector_array(
+        fields[-1].magnetic_field).tolist()
+    assert sim.imu('box', 'blind').orientation is None
 
 
 def test_packaged_imu_scene_reads_what_its_comment_and_the_readme_say():
@@ -228,3 +359,25 @@ def test_packaged_imu_scene_reads_what_its_comment_and_the_readme_say():
     exact = imus.exact(world, [0])
     np.testing.assert_allclose(exact.angular_velocity[0], [0.0, 0.0, 2.0], atol=1e-9)
     np.testing.assert_allclose(exact.specific_force[0], [-0.4, 0.0, 9.81], atol=1e-4)
+
+
+def test_the_readme_example_of_several_imus_publishes_what_its_comments_say(rigid_sim):
+    """The README's drone: ~/drone/imu with ~/drone/imu/mag and no orientation, ~/drone/nose_imu.
+
+    Level and at rest without gravity, the magnetometer reads the field itself.
+    """
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parents[1] / 'README.md').read_text()
+    text, = [block for block in re.findall(r'```yaml\n(.*?)```', readme, re.S)
+             if 'name: drone' in block]
+    sim = rigid_sim(yaml=text)
+    published = {p.topic_name: p.msg_type for p in sim.node.publishers}
+    assert published['/rigid_sim/drone/imu'] is Imu
+    assert published['/rigid_sim/drone/imu/mag'] is MagneticField
+    assert published['/rigid_sim/drone/nose_imu'] is Imu
+    sim.step(1)
+    first, nose = sim.imu('drone'), sim.imu('drone', 'nose_imu')
+    assert (first.frame_id, nose.frame_id) == ('drone/imu', 'drone/nose')
+    assert first.orientation is None and nose.orientation.tolist() == [0.0, 0.0, 0.0, 1.0]
+    field = yaml.safe_load(text)['magnetic_field']
+    assert np.abs(first.magnetic_field - field).max() < 6 * 1.0e-7

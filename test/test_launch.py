@@ -2,13 +2,20 @@
 # SPDX-License-Identifier: Apache-2.0
 """The launch file and the RViz view: they compile, load, and name what the node has.
 
-``launch`` has no wheel here, so the launch file is compiled and read, not run.
+``launch`` and ``launch_ros`` have no wheel here: the launch file runs on stand-ins for
+their classes, which record what they were made with, and what it hands the node (its
+namespace, parameters file and parameters) is then given to a real node.
 """
 import ast
+import importlib.util
 import py_compile
+import sys
+import types
 from pathlib import Path
 
+import pytest
 import yaml
+from rclpy.parameter import Parameter
 
 from rigid_sim.node import RigidSimNode
 from rigid_sim.parameters import SPECS
@@ -23,9 +30,92 @@ def test_launch_file_compiles_and_its_arguments_are_node_parameters_or_rviz(tmp_
     tree = ast.parse(LAUNCH.read_text())
     arguments, = [ast.literal_eval(node.value) for node in tree.body
                   if isinstance(node, ast.Assign) and node.targets[0].id == 'ARGUMENTS']
-    assert set(arguments) == {'scene', 'integrator', 'rate', 'rviz'}
-    assert set(arguments) - {'rviz'} <= set(SPECS)
+    assert set(arguments) == {'scene', 'integrator', 'rate', 'start_paused', 'params_file',
+                              'namespace', 'rviz'}
+    assert set(arguments) - {'rviz', 'params_file', 'namespace'} <= set(SPECS)
     assert SPECS['rate'].kind is float   # the launch file passes rate as a double
+    assert SPECS['start_paused'].kind is bool   # and start_paused as a bool
+
+
+class Made:
+    """Stands in for a launch class: keeps what it was made with."""
+
+    def __init__(self, *args, **kwargs):
+        self.args, self.kwargs = args, kwargs
+
+
+class Configuration(Made):
+    """LaunchConfiguration: its value is the context's entry for its name."""
+
+    def perform(self, context):
+        return context[self.args[0]]
+
+
+@pytest.fixture
+def launch_file(monkeypatch):
+    """Load the launch file with stand-ins for launch and launch_ros."""
+    names = {'launch': ['LaunchDescription'],
+             'launch.actions': ['DeclareLaunchArgument', 'OpaqueFunction'],
+             'launch.conditions': ['IfCondition'],
+             'launch.substitutions': ['LaunchConfiguration', 'PathJoinSubstitution'],
+             'launch_ros.actions': ['Node'], 'launch_ros.substitutions': ['FindPackageShare']}
+    for module_name, classes in names.items():
+        module = types.ModuleType(module_name)
+        for name in classes:
+            setattr(module, name, Configuration if name == 'LaunchConfiguration'
+                    else type(name, (Made,), {}))
+        monkeypatch.setitem(sys.modules, module_name, module)
+    spec = importlib.util.spec_from_file_location('rigid_sim_launch', LAUNCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def arguments(**given):
+    """Return the launch context: every argument at its default, but those ``given``."""
+    tree = ast.parse(LAUNCH.read_text())
+    declared, = [ast.literal_eval(node.value) for node in tree.body
+                 if isinstance(node, ast.Assign) and node.targets[0].id == 'ARGUMENTS']
+    return {name: given.get(name, default) for name, (default, _) in declared.items()}
+
+
+def test_launch_arguments_reach_the_node_namespace_parameters_file_and_start_paused(
+        launch_file, ros_context, tmp_path):
+    """params_file, namespace and start_paused, handed on as ros2 launch would, start the node.
+
+    The file sets step_ticks and rate; the rate argument overrides the file's; the node runs
+    under /sim1/rigid_sim, paused.
+    """
+    params = tmp_path / 'params.yaml'
+    params.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'step_ticks': 7, 'rate': 50.0}}}))
+    simulator, viewer = launch_file.simulator(arguments(
+        params_file=str(params), namespace='sim1', start_paused='True', rate='200'))
+    made = simulator.kwargs
+    assert made['namespace'] == 'sim1'
+    files, given = made['parameters'][:-1], made['parameters'][-1]
+    assert files == [str(params)] and given == {'start_paused': True, 'rate': 200.0}
+    node = RigidSimNode(context=ros_context, namespace=made['namespace'],
+                        cli_args=['--ros-args', '--params-file', *files],
+                        parameter_overrides=[Parameter(k, value=v) for k, v in given.items()])
+    try:
+        assert node.get_fully_qualified_name() == '/sim1/rigid_sim'
+        assert (node.paused, node.settings.step_ticks, node.settings.rate) == (True, 7, 200.0)
+        published = {publisher.topic_name for publisher in node.publishers}
+        assert {new for _, new in viewer.kwargs['remappings']} <= published
+    finally:
+        node.destroy_node()
+
+
+def test_empty_launch_arguments_leave_the_node_its_defaults(launch_file):
+    simulator, viewer = launch_file.simulator(arguments())
+    assert simulator.kwargs['namespace'] == '' and simulator.kwargs['parameters'] == [{}]
+    assert all(old == new for old, new in viewer.kwargs['remappings'])
+
+
+def test_a_start_paused_that_is_not_a_bool_is_refused_naming_it(launch_file):
+    with pytest.raises(ValueError, match="start_paused: expected true or false, got 'yes'"):
+        launch_file.simulator(arguments(start_paused='yes'))
 
 
 def displays():
@@ -40,12 +130,13 @@ def test_rviz_view_has_world_fixed_frame_and_the_three_displays():
             'rviz_default_plugins/TF'} <= classes
 
 
-def test_every_topic_the_rviz_view_names_is_published_by_the_node(ros_context):
-    """Topics are read from every display of the file; the node runs the default scene."""
+def test_every_topic_the_rviz_view_names_is_published_by_the_node(rigid_sim, launch_file):
+    """Topics are read from every display of the file; the node runs the default scene.
+
+    They are the ones the launch file remaps into a namespace.
+    """
     topics = {display['Topic']['Value'] for display in displays()['Displays']
               if 'Topic' in display}
-    assert len(topics) == 2
-    node = RigidSimNode(context=ros_context)
-    published = {publisher.topic_name for publisher in node.publishers}
-    node.destroy_node()
+    assert topics == {f'/rigid_sim/{topic}' for topic in launch_file.VIEWED}
+    published = {publisher.topic_name for publisher in rigid_sim().node.publishers}
     assert topics <= published

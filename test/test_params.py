@@ -14,7 +14,7 @@ import pytest
 import yaml
 from rclpy.parameter import Parameter
 
-from rigid_sim import conversions
+import ros_tools
 from rigid_sim.core.scene import SceneError
 from rigid_sim.core.scene_limits import WORK_LIMITS
 from rigid_sim.node import RigidSimNode
@@ -43,8 +43,8 @@ bodies:
 """
 
 
-def clock_nanoseconds(sim):
-    return [m.clock.sec * 10 ** 9 + m.clock.nanosec for m in sim.received['/clock']]
+def clock_nanoseconds(probe):
+    return [m.clock.sec * 10 ** 9 + m.clock.nanosec for m in probe.heard['/clock']]
 
 
 def test_integer_literals_accepted_and_time_step_defaults_to_one_over_rate(
@@ -60,24 +60,24 @@ def test_integer_literals_accepted_and_time_step_defaults_to_one_over_rate(
     node.destroy_node()
 
 
-def test_clock_advances_by_time_step_per_tick(harness, write_scene):
+def test_clock_advances_by_time_step_per_tick(rigid_sim):
     """/clock and every stamp advance by time_step per tick, whatever the substeps."""
-    sim = harness(write_scene(SCENE), rate=50, substeps=4)
-    sim.tick(5)
-    steps = np.diff([0] + clock_nanoseconds(sim))
+    sim = rigid_sim(yaml=SCENE, rate=50, substeps=4)
+    probe = ros_tools.Probe(sim, 'box')
+    sim.step(5)
+    steps = np.diff([0] + clock_nanoseconds(probe))
     np.testing.assert_allclose(steps, 2 * 10 ** 7, atol=1)
-    assert sim.latest('box/pose').header.stamp == sim.latest('/clock').clock
+    assert probe.latest('box/pose').header.stamp == probe.latest('/clock').clock
 
 
-def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(harness, write_scene):
+def test_outputs_go_out_at_publish_rate_while_physics_ticks_at_rate(rigid_sim):
     """At rate 100 Hz and publish_rate 25 Hz: one state message per 4 ticks, /clock every tick."""
-    sim = harness(write_scene(SCENE), rate=100.0, publish_rate=25.0, time_step=0.125)
-    sim.tick(8)
-    assert len(sim.received['/clock']) == 8
-    stamps = [conversions.to_seconds(m.header.stamp)
-              for m in sim.received[sim.topic('box/pose')]]
-    assert stamps == [0.125, 0.625]
-    assert len(sim.received[sim.topic('poses')]) == 2
+    sim = rigid_sim(yaml=SCENE, rate=100.0, publish_rate=25.0, time_step=0.125)
+    probe = ros_tools.Probe(sim, 'box')
+    sim.step(8)
+    assert len(probe.heard['/clock']) == 8
+    assert probe.stamps('box/pose') == [0.125, 0.625]
+    assert len(probe.heard['poses']) == 2
 
 
 @pytest.mark.parametrize('name, value, reason', [
@@ -140,28 +140,29 @@ def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context
     assert (with_file.settings.rate, with_file.settings.publish_rate) == (50.0, 50.0)
 
 
-def test_refused_runtime_values_leave_the_node_running_unchanged(harness, write_scene):
+def test_refused_runtime_values_leave_the_node_running_unchanged(rigid_sim, write_scene):
     """ros2 param set with a bad value or a malformed scene.
 
     Refused with the reason, and the node keeps simulating its scene with its previous settings.
     """
-    sim = harness(write_scene(SCENE), time_step=0.125)
-    before = sim.sim.settings
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    probe = ros_tools.Probe(sim, 'box')
+    before = sim.node.settings
     rate, = sim.set_parameters(rate=-5.0)
     assert not rate.successful and 'rate' in rate.reason
     integrator, = sim.set_parameters(integrator='leapfrog')
     assert not integrator.successful and 'rk4' in integrator.reason
     malformed = write_scene(MALFORMED_SCENE, 'malformed.yaml')
     assert sim.set_parameters(scene=malformed)[0].successful   # loaded beside, then refused
-    refusal = sim.diagnostics()['last refused change']
+    refusal = probe.diagnostics.values()['last refused change']
     assert malformed in refusal and 'bodies[0].shape.size' in refusal
     assert 'list of 3 numbers' in refusal
-    assert sim.sim.get_parameter('scene').value == before.scene   # set back
+    assert sim.node.get_parameter('scene').value == before.scene   # set back
     frame, = sim.set_parameters(world_frame='box')
     assert not frame.successful and "is a frame of body 'box'" in frame.reason
-    assert sim.sim.settings == before and sim.sim.get_parameter('rate').value == before.rate
-    sim.tick(8)
-    position, _, velocity, _, t = sim.state('box')
+    assert sim.node.settings == before and sim.node.get_parameter('rate').value == before.rate
+    sim.step(8)
+    position, _, velocity, _, t = probe.state('box')
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
 
 
@@ -186,52 +187,54 @@ def test_hostile_value_is_refused_at_start_with_a_short_reason(
     assert len(str(refusal.value)) < 1000
 
 
-def test_hostile_runtime_values_are_refused_and_the_clock_keeps_advancing(harness, write_scene):
+def test_hostile_runtime_values_are_refused_and_the_clock_keeps_advancing(rigid_sim):
     """Each is refused with its reason, quoted short, and the node runs on unchanged."""
-    sim = harness(write_scene(SCENE), time_step=0.125)
-    before = sim.sim.settings
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    probe = ros_tools.Probe(sim)
+    before = sim.node.settings
     for name, value, reason in HOSTILE:
         result, = sim.set_parameters(**{name: value})
         assert not result.successful, name
         assert len(result.reason) < 1000 and (reason in result.reason or 'range' in
                                               result.reason), result.reason
-    assert sim.sim.settings == before
-    sim.tick(8)
-    assert clock_nanoseconds(sim)[-1] == 1_000_000_000
+    assert sim.node.settings == before
+    sim.step(8)
+    assert clock_nanoseconds(probe)[-1] == 1_000_000_000
 
 
-def test_runtime_changes_take_effect(harness, write_scene):
+def test_runtime_changes_take_effect(rigid_sim, write_scene):
     """Accepted changes apply at once.
 
     ``rate`` (an integer literal) sets the timer period, ``world_frame`` the stamps' frame,
     ``integrator`` the method, ``scene`` a new world at time 0.
     """
-    sim = harness(write_scene(SCENE), time_step=0.125)
-    sim.tick(2)
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    probe = ros_tools.Probe(sim, 'box', 'puck')
+    sim.step(2)
     assert all(r.successful for r in sim.set_parameters(rate=20, world_frame='map',
                                                         integrator='euler'))
-    assert sim.sim.loop.timer.timer_period_ns == 50_000_000
-    assert sim.sim.world.integrator.name == 'euler'
-    sim.tick(1)
-    assert sim.latest('box/odom').header.frame_id == 'map'
-    assert sim.state('box')[4] == 0.375  # the integrator changed, not the state or time
+    assert sim.node.loop.timer.timer_period_ns == 50_000_000
+    assert sim.node.world.integrator.name == 'euler'
+    sim.step(1)
+    assert probe.latest('box/odom').header.frame_id == 'map'
+    assert probe.state('box')[4] == 0.375  # the integrator changed, not the state or time
     result, = sim.set_parameters(scene=write_scene(OTHER_SCENE, 'other.yaml'))
     assert result.successful
-    assert [body.name for body in sim.sim.scene.bodies] == ['puck']
-    sim.listen()
-    sim.tick(1)
-    position, _, _, _, t = sim.state('puck')
+    assert [body.name for body in sim.node.scene.bodies] == ['puck']
+    sim.step(1)
+    position, _, _, _, t = probe.state('puck')
     assert t == 0.125 and position.tolist() == [0.0, 0.0, 2.0]
 
 
 def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
-        harness, write_scene, tmp_path):
+        rigid_sim, write_scene, tmp_path):
     """Refuse each hostile scene naming the file, and run the old scene on.
 
     Each of these once stopped the node: a RecursionError, a 1e12-sample array, a read of
     /dev/zero.
     """
-    sim = harness(write_scene(SCENE), time_step=0.125)
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    probe = ros_tools.Probe(sim, 'box')
     sampled = SCENE.replace('mass: 2.0', 'mass: 2.0\n    inertia: {method: sampling, '
                                          'samples: 1000000000000}')
     (tmp_path / 'latin1.yaml').write_bytes(SCENE.encode() + b'# caf\xe9\n')
@@ -243,11 +246,11 @@ def test_hostile_scene_files_at_runtime_are_refused_naming_file_and_reason(
                          (str(fifo), 'not a regular file'), ('/dev/zero', 'not a regular'),
                          (str(tmp_path), 'not a regular file')]:
         assert sim.set_parameters(scene=path)[0].successful   # loaded beside, then refused
-        refusal = sim.sim.reconfiguration.last_refusal
+        refusal = sim.node.reconfiguration.last_refusal
         assert path in refusal and reason in refusal, refusal
-        assert sim.sim.get_parameter('scene').value == sim.sim.settings.scene != path
-    sim.tick(8)
-    position, _, velocity, _, t = sim.state('box')
+        assert sim.node.get_parameter('scene').value == sim.node.settings.scene != path
+    sim.step(8)
+    position, _, velocity, _, t = probe.state('box')
     assert t == 1.0 and position[0] == pytest.approx(1.0) and velocity[0] == 1.0
 
 
@@ -257,7 +260,7 @@ GREEDY = ('limits: {max_samples: 100000000}\nbodies:\n  - {name: b, mass: 1.0, s
 
 
 def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
-        ros_context, harness, write_scene, monkeypatch):
+        ros_context, rigid_sim, write_scene, monkeypatch):
     """A scene asking for more than the node's limit parameters is refused before any work.
 
     At start the node does not start; at runtime the change is prepared beside the running
@@ -274,31 +277,32 @@ def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
     with pytest.raises(SceneError) as refused:
         RigidSimNode(context=ros_context, parameter_overrides=[Parameter('scene', value=greedy)])
     assert refusal in str(refused.value)
-    sim = harness(write_scene(SCENE), time_step=0.125)
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
     assert sim.set_parameters(scene=greedy)[0].successful   # accepted for preparing
-    assert refusal in sim.sim.reconfiguration.last_refusal
-    assert sim.sim.get_parameter('scene').value == sim.sim.settings.scene != greedy
+    assert refusal in sim.node.reconfiguration.last_refusal
+    assert sim.node.get_parameter('scene').value == sim.node.settings.scene != greedy
     three = write_scene('bodies:\n' + ''.join(
         f'  - {{name: b{i}, mass: 1.0, shape: {{type: sphere, radius: 0.1}}}}\n'
         for i in range(3)), 'three.yaml')
     lowered, scene = sim.set_parameters(max_bodies=2, scene=three)
-    assert lowered.successful and sim.sim.settings.max_bodies == 2
-    assert '3 bodies, above the limit of 2' in sim.sim.reconfiguration.last_refusal
-    assert sim.sim.get_parameter('scene').value != three
+    assert lowered.successful and sim.node.settings.max_bodies == 2
+    assert '3 bodies, above the limit of 2' in sim.node.reconfiguration.last_refusal
+    assert sim.node.get_parameter('scene').value != three
     raised, scene = sim.set_parameters(max_bodies=3, scene=three)
     assert raised.successful and scene.successful
-    assert [body.name for body in sim.sim.scene.bodies] == ['b0', 'b1', 'b2']
+    assert [body.name for body in sim.node.scene.bodies] == ['b0', 'b1', 'b2']
 
 
-def test_start_paused_set_at_runtime_is_refused_pointing_at_pause(harness, write_scene):
+def test_start_paused_set_at_runtime_is_refused_pointing_at_pause(rigid_sim):
     """start_paused is read at start only: a change at runtime is refused, not ignored."""
-    sim = harness(write_scene(SCENE), time_step=0.125)
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    probe = ros_tools.Probe(sim)
     result, = sim.set_parameters(start_paused=True)
     assert not result.successful
     assert result.reason == ("parameter 'start_paused': read at start only; call ~/pause to "
                              'pause or resume the running node')
-    assert not sim.sim.paused and sim.sim.get_parameter('start_paused').value is False
+    assert not sim.node.paused and sim.node.get_parameter('start_paused').value is False
     same, = sim.set_parameters(start_paused=False)
     assert same.successful
-    sim.tick(8)
-    assert clock_nanoseconds(sim)[-1] == 1_000_000_000
+    sim.step(8)
+    assert clock_nanoseconds(probe)[-1] == 1_000_000_000

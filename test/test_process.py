@@ -12,16 +12,21 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import rclpy
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseArray, PoseStamped, WrenchStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from std_srvs.srv import Trigger
+from rosgraph_msgs.msg import Clock
+from std_srvs.srv import SetBool, Trigger
 
+from physics_cases import FLIGHT_STEP as STEP, FLIGHT_V0 as V0, FLIGHT_X0 as X0
+from physics_cases import FLYING_BOX
 from rigid_sim import conversions
-from ros_harness import TIMEOUT, spin_until
+from ros_tools import TIMEOUT, record, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 NAMESPACE = f'/t{os.getpid()}'
@@ -165,3 +170,69 @@ def test_lockstep_from_another_process_gives_bit_identical_poses(probe, tmp_path
     assert [t for t, _ in first] == pytest.approx(expected_times, rel=1e-12)
     assert first == second
     assert first[0][1] != first[-1][1]  # the bodies moved: the comparison means something
+
+
+def call(node, executor, service_type, name, request):
+    """Call ``name`` of the node process from ``node``; the response."""
+    client = node.create_client(service_type, f'{NAMESPACE}/rigid_sim/{name}')
+    spin_until(executor, client.service_is_ready, TIMEOUT, f'~/{name} ready')
+    future = client.call_async(request)
+    spin_until(executor, future.done, TIMEOUT, f'~/{name} answered')
+    node.destroy_client(client)
+    return future.result()
+
+
+def test_rate_zero_ticks_without_a_wall_clock_and_stands_still_while_paused(probe, tmp_path):
+    """At rate 0 the node ticks as fast as it can; paused, it ticks only on ~/step.
+
+    This is the node's own loop, which the test kit replaces, so it runs as a process. /clock
+    advances by exactly time_step per tick: a subscriber slower than the node may miss some
+    /clock messages (the publisher keeps the last 10), so the received times are checked to
+    be whole, increasing tick counts, and each pose to be x0 + v0 t at its stamp. Paused, the
+    clock stands at the time of the last tick until ~/step advances it by one.
+    /diagnostics, with no wall rate to aim at, states no real-time factor target and is OK.
+    """
+    node, executor = probe
+    scene = tmp_path / 'flying_box.yaml'
+    scene.write_text(FLYING_BOX)
+    clock = record(node, Clock, '/clock')
+    poses = record(node, PoseStamped, f'{NAMESPACE}/rigid_sim/box/pose')
+    diagnostics = record(node, DiagnosticArray, '/diagnostics')
+    process = start_node('-p', f'scene:={scene}', '-p', 'rate:=0', '-p', f'time_step:={STEP}',
+                         cwd=tmp_path)
+
+    def latest_time():
+        return conversions.to_seconds(clock[-1].clock)
+    try:
+        spin_until(executor, lambda: clock and latest_time() >= 2.0 and len(poses) >= 5,
+                   START_TIMEOUT, 'two simulated seconds and five poses')
+        ticks = np.array([conversions.to_seconds(m.clock) for m in clock]) / STEP
+        np.testing.assert_array_equal(ticks, np.round(ticks))
+        assert np.all(np.diff(ticks) > 0)
+        for pose in poses[-5:]:
+            np.testing.assert_allclose(conversions.pose_arrays(pose.pose)[0],
+                                       X0 + V0 * conversions.to_seconds(pose.header.stamp),
+                                       rtol=0, atol=1e-12)
+        assert call(node, executor, SetBool, 'pause', SetBool.Request(data=True)).success
+        answer = call(node, executor, Trigger, 'step', Trigger.Request())
+        assert answer.success
+        stepped = float(answer.message.split()[-2])   # 'advanced 1 ticks to T s', exact
+        spin_until(executor, lambda: latest_time() == stepped, TIMEOUT, 'the stepped tick')
+        assert conversions.to_seconds(clock[-2].clock) == stepped - STEP   # it stood still
+        for _ in range(20):
+            executor.spin_once(timeout_sec=0.01)
+        assert latest_time() == stepped
+        spin_until(executor, lambda: poses[-1].header.stamp == conversions.to_time(stepped),
+                   TIMEOUT, 'the stepped pose')
+        np.testing.assert_allclose(conversions.pose_arrays(poses[-1].pose)[0],
+                                   X0 + V0 * stepped, rtol=0, atol=1e-12)
+        spin_until(executor, lambda: diagnostics, TIMEOUT, '/diagnostics')
+        status = diagnostics[-1].status[0]
+        values = conversions.diagnostic_values(diagnostics[-1])
+        assert values['real-time factor target'].startswith('none')
+        assert status.level == DiagnosticStatus.OK
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=TIMEOUT) == 0
+    finally:
+        process.kill()
+        process.communicate()

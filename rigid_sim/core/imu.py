@@ -1,6 +1,6 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""IMUs mounted on bodies: what a scene declares, and what they read.
+"""IMUs mounted on bodies: what they read (their scene entry: :mod:`.imu_spec`).
 
 An IMU at body-frame point p of a body with centre of mass c reads, in the body's axes,
 
@@ -11,7 +11,8 @@ An IMU at body-frame point p of a body with centre of mass c reads, in the body'
 where F and tau are the net force and the torque about c at the current state, time and
 held inputs (:meth:`rigid_sim.core.world.World.net_wrench`), never differences of
 velocities. A body at rest on the ground or hanging from a spring thus reads +g upwards; a
-falling one reads 0. Readings are taken at the first tick at or after each multiple of the
+falling one reads 0. A magnetometer reads the scene's field B (world axes) in the body's
+axes, R^T B. Readings are taken at the first tick at or after each multiple of the
 IMU's period, of simulated time, and get noise from :mod:`rigid_sim.core.imu_noise`.
 """
 import math
@@ -19,91 +20,43 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigid_sim.core import rotation
 from rigid_sim.core.imu_kinematics import readings
-from rigid_sim.core.imu_noise import NoisySensor, SensorNoise
-from rigid_sim.core.scene_fields import (
-    ABSENT, fields, MAX_MAGNITUDE, Mistake, non_negative, number, of_type, positive, raw, table,
-    vector)
+from rigid_sim.core.imu_noise import NoisySensor
+from rigid_sim.core.imu_spec import ImuSpec, parse_imus
 from rigid_sim.core.state import ANGULAR_MOMENTUM, ORIENTATION
-from rigid_sim.core.text import shown
 
-DEFAULT_FRAME = 'imu'   # child frame <body>/imu of an IMU placed by coordinates
-NOISE = {'stddev': (non_negative, 0.0), 'bias_mean': (number, 0.0),
-         'bias_stddev': (non_negative, 0.0), 'dynamic_bias_stddev': (non_negative, 0.0),
-         'dynamic_bias_correlation_time': (positive, ABSENT)}
-IMU = {'point': (raw, [0.0, 0.0, 0.0]), 'rate': (positive, ABSENT),
-       'noise': (table({'gyro': (table(NOISE), ABSENT), 'accel': (table(NOISE), ABSENT)}),
-                 ABSENT),
-       'seed': (of_type(int, 'a whole number'), 0)}
+__all__ = ['ImuSpec', 'Imus', 'Readings', 'build_imus', 'parse_imus']
 # A reading is due when simulated time is within this fraction of a period of its time, so
 # that sums of binary-inexact time steps do not push a reading to the next tick.
 DUE_SLACK = 1e-9
+STREAMS = 3   # noise streams per IMU: gyro, accel, magnetometer
 
 
-@dataclass(frozen=True)
-class ImuSpec:
-    """One body's IMU as the scene declares it."""
-
-    point: np.ndarray   # (3,) m, body-frame coordinates of the mount point
-    frame: str          # child frame name: <body>/<frame> (a named point, or 'imu')
-    rate: float         # Hz of simulated time; None: every tick
-    gyro: SensorNoise   # None: exact angular velocity
-    accel: SensorNoise  # None: exact specific force
-    seed: int           # of this IMU's noise stream
-
-
-def parse_imu(value, key, points):
-    """Parse a body's ``imu`` entry into an :class:`ImuSpec`.
-
-    ``points`` are the body's named points.
-
-    Raises :class:`~rigid_sim.core.scene_fields.Mistake` naming the key and the reason.
-    """
-    imu = fields(value, key, IMU)
-    point = imu['point']
-    if isinstance(point, str):
-        if point not in points:
-            raise Mistake(f'{key}.point', f'no point named {point!r}; the body has '
-                                          f'{sorted(points)} (or give [x, y, z])')
-        where, frame = points[point], point
-    else:
-        if DEFAULT_FRAME in points:
-            raise Mistake(f'{key}.point', f'the body has a point named {DEFAULT_FRAME!r}, the '
-                                          'frame of an IMU given by coordinates: name it')
-        where, frame = vector(point, f'{key}.point'), DEFAULT_FRAME
-    # Bounded as every number of a scene is, though numpy would take any size of seed.
-    if not 0 <= imu['seed'] <= MAX_MAGNITUDE:
-        raise Mistake(f'{key}.seed', f'must be a whole number >= 0 and at most '
-                                     f'{MAX_MAGNITUDE:g}, got {shown(imu["seed"])}')
-    noise = imu.get('noise', {})
-    sensors = {name: SensorNoise(**noise[name]) if name in noise else None
-               for name in ('gyro', 'accel')}
-    return ImuSpec(point=np.array(where, dtype=float), frame=frame, rate=imu.get('rate'),
-                   seed=imu['seed'], **sensors)
-
-
-def build_imus(scene_bodies, bodies, gravity):
-    """Build the :class:`Imus` of the scene's bodies that declare one.
+def build_imus(scene_bodies, bodies, gravity, magnetic_field=None):
+    """Build the :class:`Imus` of the scene's bodies that declare any.
 
     Parameters
     ----------
     scene_bodies : sequence of BodySpec
-        The scene's bodies; ``imu`` is an ImuSpec or None.
+        The scene's bodies; ``imus`` is a tuple of ImuSpec, empty for none.
     bodies : RigidBodies
         The same bodies, as the world holds them.
     gravity : (3,) float or None
         The scene's gravitational acceleration, m/s^2, world frame.
+    magnetic_field : (3,) float or None
+        The scene's magnetic field, T, world frame (None: no magnetometer may read it).
 
     Returns
     -------
     Imus or None
         None when no body declares an IMU.
     """
-    mounted = [(index, body.imu) for index, body in enumerate(scene_bodies)
-               if body.imu is not None]
+    mounted = [(index, spec) for index, body in enumerate(scene_bodies) for spec in body.imus]
     if not mounted:
         return None
-    return Imus(bodies, mounted, np.zeros(3) if gravity is None else np.asarray(gravity))
+    return Imus(bodies, mounted, np.zeros(3) if gravity is None else np.asarray(gravity),
+                np.zeros(3) if magnetic_field is None else np.asarray(magnetic_field))
 
 
 @dataclass(frozen=True)
@@ -114,7 +67,8 @@ class Readings:
     which: list                  # positions among the Imus
     angular_velocity: np.ndarray  # (K, 3) rad/s, body axes
     specific_force: np.ndarray    # (K, 3) m/s^2, body axes
-    orientation: np.ndarray       # (K, 4) (x, y, z, w), body to world
+    orientation: np.ndarray       # (K, 4) (x, y, z, w), body to world; 0 where not published
+    magnetic_field: np.ndarray    # (K, 3) T, body axes (read by the magnetometers only)
 
 
 class Imus:
@@ -124,10 +78,12 @@ class Imus:
     ----------
     bodies : RigidBodies
     mounted : list of (body index, ImuSpec)
+        A body's IMUs in the order of its scene entry.
     gravity : (3,) m/s^2, world axes
+    magnetic_field : (3,) T, world axes
     """
 
-    def __init__(self, bodies, mounted, gravity):
+    def __init__(self, bodies, mounted, gravity, magnetic_field):
         self.bodies = [index for index, _ in mounted]
         self.specs = [spec for _, spec in mounted]
         self._mass = bodies.mass[self.bodies]
@@ -136,6 +92,9 @@ class Imus:
         self._lever = np.array([spec.point for spec in self.specs]) - bodies.com_in_body[
             self.bodies]
         self._gravity = np.asarray(gravity, dtype=float)
+        self._field = np.asarray(magnetic_field, dtype=float)
+        self._blind = np.array([not spec.orientation for spec in self.specs])
+        self._reads_field = any(spec.magnetometer for spec in self.specs)
         self._next = np.zeros(len(mounted))      # s, when each reads next
         self._last = np.full(len(mounted), math.nan)
         self._sensors = []
@@ -146,13 +105,16 @@ class Imus:
         self._next[:] = 0.0
         self._last[:] = math.nan
         self._sensors = []
-        for body, spec in zip(self.bodies, self.specs):
-            # One stream per sensor, from the seed and the body: two IMUs with the same seed
-            # on different bodies still draw independent noise.
-            seeds = np.random.SeedSequence([spec.seed, body]).spawn(2)
+        for k, (body, spec) in enumerate(zip(self.bodies, self.specs)):
+            # Streams from the seed and the body, so that two IMUs with the same seed on
+            # different bodies draw independent noise; the j-th IMU of a body takes the
+            # j-th run of STREAMS children, so a body's first IMU draws as it always has.
+            j = self.bodies[:k].count(body)
+            seeds = np.random.SeedSequence([spec.seed, body]).spawn(STREAMS * (j + 1))
             self._sensors.append([None if noise is None
                                   else NoisySensor(noise, np.random.default_rng(seed))
-                                  for noise, seed in zip((spec.gyro, spec.accel), seeds)])
+                                  for noise, seed in zip((spec.gyro, spec.accel, spec.mag),
+                                                         seeds[STREAMS * j:])])
 
     def due(self, time):
         """Positions of the IMUs that read at ``time`` (s); their next times move on."""
@@ -171,11 +133,10 @@ class Imus:
         for row, k in enumerate(which):
             interval = 0.0 if math.isnan(self._last[k]) else world.time - self._last[k]
             self._last[k] = world.time
-            gyro, accel = self._sensors[k]
-            if gyro is not None:
-                exact.angular_velocity[row] = gyro.read(exact.angular_velocity[row], interval)
-            if accel is not None:
-                exact.specific_force[row] = accel.read(exact.specific_force[row], interval)
+            for sensor, values in zip(self._sensors[k], (
+                    exact.angular_velocity, exact.specific_force, exact.magnetic_field)):
+                if sensor is not None:
+                    values[row] = sensor.read(values[row], interval)
         return exact
 
     def exact(self, world, which):
@@ -188,5 +149,11 @@ class Imus:
                  np.ascontiguousarray(y[:, ANGULAR_MOMENTUM]), force[bodies], torque[bodies],
                  self._inertia[which], self._inertia_inv[which], self._mass[which],
                  self._lever[which], self._gravity, omega, specific_force)
-        return Readings(world.time, list(which), omega, specific_force,
-                        y[:, ORIENTATION].copy())
+        orientation = y[:, ORIENTATION].copy()
+        field = np.zeros((len(bodies), 3))
+        if self._reads_field:   # else an IMU pays nothing for magnetometers it has not
+            turn = rotation.to_matrix(rotation.normalize(orientation))
+            field[:] = self._field
+            field = rotation.rotate_inverse(turn, field)
+        orientation[self._blind[which]] = 0.0
+        return Readings(world.time, list(which), omega, specific_force, orientation, field)

@@ -19,7 +19,7 @@ from rigid_sim.core.inputs import (
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
-from rigid_sim.core.imu import parse_imu
+from rigid_sim.core.imu_spec import parse_imus
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
@@ -57,7 +57,7 @@ class BodySpec:
     angular_velocity: np.ndarray      # (3,) rad/s
     points: dict                      # name -> (3,) m, body-frame coordinates
     wrench_input: bool                # False: the body takes no applied wrenches
-    imu: object = None                # rigid_sim.core.imu.ImuSpec, or None: no IMU
+    imus: tuple = ()                  # of rigid_sim.core.imu_spec.ImuSpec, in file order
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,7 @@ class Scene:
     max_torque: float   # N m
     bodies: tuple       # of BodySpec, in file order
     effects: dict
+    magnetic_field: np.ndarray = None   # (3,) T, world axes; None: not given
 
 
 SHAPES = {
@@ -108,6 +109,7 @@ SCENE = {'world_frame': (token, 'world'),
                            'max_torque': (positive, DEFAULT_MAX_TORQUE),
                            **{name: (count, ABSENT) for name in WORK_LIMITS}}), {}),
          'effects': (table(EFFECTS), {}),
+         'magnetic_field': (vector, ABSENT),   # read by magnetometers only, T
          # Raw here; _body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
 
@@ -163,8 +165,11 @@ def _inertia(value, key):
     return inertia
 
 
-def _body(value, key, budget):
-    """One :class:`BodySpec` from its scene entry, within the scene's work ``budget``."""
+def _body(value, key, budget, has_field):
+    """One :class:`BodySpec` from its scene entry, within the scene's work ``budget``.
+
+    ``has_field``: whether the scene gives a magnetic field (for magnetometers).
+    """
     body = fields(value, key, BODY)
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
@@ -185,16 +190,18 @@ def _body(value, key, budget):
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
         linear_velocity=body['twist']['linear'], angular_velocity=body['twist']['angular'],
         points=body['points'], wrench_input=body['wrench_input'],
-        imu=parse_imu(body['imu'], f'{key}.imu', body['points']) if 'imu' in body else None)
+        imus=parse_imus(body['imu'], f'{key}.imu', body['points'], has_field)
+        if 'imu' in body else ())
 
 
-def _bodies(entries, world_frame, budget):
+def _bodies(entries, world_frame, budget, has_field):
     """All bodies, with unique names and point names that do not shadow a frame."""
     if not entries:
         raise Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
     if len(entries) > budget.limits['max_bodies']:
         raise Mistake('bodies', f'{len(entries)} bodies, {budget.above("max_bodies")}')
-    bodies = tuple(_body(entry, f'bodies[{i}]', budget) for i, entry in enumerate(entries))
+    bodies = tuple(_body(entry, f'bodies[{i}]', budget, has_field)
+                   for i, entry in enumerate(entries))
     clash = world_frame_clash(bodies, world_frame)
     if clash is not None:
         index, point, reason = clash
@@ -300,7 +307,8 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
         asked = scene['limits']
         budget = Budget({name: asked.pop(name) for name in WORK_LIMITS if name in asked},
                         allowed, base_dir)
-        bodies = _bodies(scene['bodies'], scene['world_frame'], budget)
+        field = scene.get('magnetic_field')
+        bodies = _bodies(scene['bodies'], scene['world_frame'], budget, field is not None)
         effects = dict(scene['effects'])
         names = [body.name for body in bodies]
         springs = tuple(_spring(spring, f'effects.springs[{i}]', names)
@@ -312,7 +320,7 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
     except Mistake as mistake:
         raise SceneError(path, mistake.key, mistake.reason) from None
     return Scene(path=str(path), world_frame=scene['world_frame'], bodies=bodies,
-                 effects=effects, **scene['limits'])
+                 effects=effects, magnetic_field=field, **scene['limits'])
 
 
 def load_scene(path, **limits):

@@ -2,10 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """pytest fixtures of the rigid_sim test kit, registered as the ``rigid_sim`` plugin.
 
-``rigid_sim(scene=... or yaml=..., **parameters)`` starts a :class:`Simulation` in the
-test's own rclpy context and executor, with discovery off (only nodes of this context meet)
-and a domain of its own, and cleans everything up after the test. ``rigid_sim_context``
-and ``rigid_sim_executor`` are the context and executor, for nodes of your own.
+``rigid_sim(scene=... or yaml=..., namespace=..., **parameters)`` starts a
+:class:`Simulation` in the test's own rclpy context and executor, with discovery off (only
+nodes of this context meet) and a domain of its own, and cleans everything up after the
+test. ``rigid_sim_context`` and ``rigid_sim_executor`` are the context and executor, for
+nodes of your own.
 rclpy is imported only when a fixture is used, so the plugin costs nothing elsewhere.
 """
 import os
@@ -42,13 +43,14 @@ def rigid_sim_executor(rigid_sim_context):
 def rigid_sim(rigid_sim_context, rigid_sim_executor):
     """Give the test a starter of simulations.
 
-    Call it with a scene and parameters: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``.
+    Call it with a scene and parameters: ``sim = rigid_sim(yaml=TEXT, time_step=0.01)``;
+    ``namespace=`` for each of several simulators in one test.
     """
     from rigid_sim.testing import Simulation
     made = []
 
-    def start(scene=None, yaml=None, **parameters):
-        made.append(Simulation(rigid_sim_context, rigid_sim_executor, scene, yaml,
+    def start(scene=None, yaml=None, namespace=None, **parameters):
+        made.append(Simulation(rigid_sim_context, rigid_sim_executor, scene, yaml, namespace,
                                **parameters))
         return made[-1]
     yield start
