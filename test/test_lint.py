@@ -130,3 +130,29 @@ def test_the_document_check_catches_what_it_is_for(tmp_path):
             'docs/gone.md, gone.md; https://example.com/remote.md; LAB_NOTES')
     assert missing_documents(text, tmp_path / 'docs', root=tmp_path) == [
         'LAB_NOTES', '../../elsewhere/notes.md', 'docs/gone.md', 'gone.md']
+
+
+# An issue of the tracker, as a page might cite it ("issue 12", "issues 6 and 12", "#12"):
+# a reader of the repository cannot open one, so pages say what they mean instead.
+ISSUE_CITATION = re.compile(r'\b[Ii]ssues? ?#?\d+|(?<![\w&])#\d+\b')
+
+
+def issue_citations(text):
+    """Every citation of a tracker issue in ``text`` (URLs apart)."""
+    return [match.group() for match in ISSUE_CITATION.finditer(URL.sub('', text))]
+
+
+@pytest.mark.linter
+def test_no_document_cites_an_issue_number():
+    """README, CONTRIBUTING and docs/ say what they mean, never 'issue 12'."""
+    pages = [ROOT / 'README.md', ROOT / 'CONTRIBUTING.md', *sorted((ROOT / 'docs').glob('*.md'))]
+    cited = {str(page.relative_to(ROOT)): issue_citations(page.read_text(encoding='utf-8'))
+             for page in pages}
+    assert not {page: names for page, names in cited.items() if names}
+
+
+def test_the_issue_check_catches_what_it_is_for():
+    """Each way of citing an issue is caught; headings, colours and numbers are not."""
+    text = ('as issue 12 asked; issues 6 and 12; see #34; Issue #5.\n'
+            '## Heading 2\ncolour &#38; value 1e4 and N = 100')
+    assert issue_citations(text) == ['issue 12', 'issues 6', '#34', 'Issue #5']
