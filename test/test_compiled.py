@@ -2,11 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """The compiled kernels: warming them up changes nothing, and inputs are not effects."""
 import numpy as np
+import pytest
 
 import physics_cases as cases
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.inputs import AppliedWrenches
-from rigid_sim.core.integrators import REGISTRY
+from rigid_sim.core.integrators import REGISTRY, registry
+from rigid_sim.core.integrators.base import Integrator
+from rigid_sim.core.safeguards import UNBOUNDED
 from rigid_sim.core.warm_up import warm_up
 
 
@@ -48,6 +51,15 @@ def test_every_integrator_carries_its_own_step_bound():
         assert bound.kind in ('accuracy', 'stability', 'none'), name
     assert not REGISTRY['exact_split'].bound.rotation_all
     assert REGISTRY['dlm'].bound.rotation_all and REGISTRY['rk4'].bound.rotation_all
+
+
+def test_an_integrator_without_its_own_step_bound_is_refused_at_registration():
+    """A method that forgets its bound is not registered: it would step unguarded."""
+    forgetful = type('Forgetful', (Integrator,), {'name': 'forgetful', 'order': 2})
+    with pytest.raises(TypeError, match='Forgetful declares no step bound'):
+        registry(forgetful)
+    declared = type('Declared', (Integrator,), {'name': 'declared', 'bound': UNBOUNDED})
+    assert registry(declared) == {'declared': declared}
 
 
 def test_carlson_integrals_match_scipy():

@@ -168,10 +168,6 @@ class Snapshot:
         """(N, 3, 3) ``R``, body to world (a view of ``rotation_rows``)."""
         return self.rotation_rows.transpose(2, 0, 1)
 
-    def to_world(self, vectors):
-        """``R v`` of body-axes vectors ``(K, 3, N)`` -> world axes ``(K, 3, N)``."""
-        return np.einsum('ijn,kjn->kin', self.rotation_rows, vectors)
-
     @cached_property
     def velocity(self):
         """(N, 3) centre-of-mass velocity ``v = P / M``, world, m/s."""

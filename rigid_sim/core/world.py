@@ -74,10 +74,6 @@ class World:
         self._spare = None
         self._next_plan = None
 
-    def effect(self, kind):
-        """Return the effect of class ``kind`` in this world, or None when the scene has none."""
-        return next((e for e in self.effects if isinstance(e, kind)), None)
-
     def effect_parameters(self):
         """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
         return self._effect_parameters + (self.inputs.parameters,)

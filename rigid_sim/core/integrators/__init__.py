@@ -5,12 +5,28 @@ from rigid_sim.core.integrators.adaptive import Dopri5
 from rigid_sim.core.integrators.runge_kutta import RK4, RK4World, ExplicitEuler
 from rigid_sim.core.integrators.splitting import DLM, DLM4, ExactSplit, ExactSplit4
 from rigid_sim.core.integrators.symplectic_euler import SemiImplicitEuler
+from rigid_sim.core.safeguards import StepBound
 
 # The node's default; chosen from the accuracy benchmark (docs/accuracy.md).
 DEFAULT_INTEGRATOR = 'exact_split'
 
-REGISTRY = {cls.name: cls for cls in (
-    ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5, DLM, DLM4, ExactSplit, ExactSplit4)}
+
+def registry(*classes):
+    """Map each integrator class's ``name`` to it.
+
+    Raises TypeError for a class that declares no step bound (the base class has none): the guard
+    splits steps by it, and a method that forgot it would run unguarded.
+    """
+    for cls in classes:
+        if not isinstance(getattr(cls, 'bound', None), StepBound):
+            raise TypeError(f'integrator {cls.__name__} declares no step bound: give it the '
+                            'class attribute bound, a safeguards.StepBound '
+                            '(safeguards.UNBOUNDED where none applies)')
+    return {cls.name: cls for cls in classes}
+
+
+REGISTRY = registry(
+    ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5, DLM, DLM4, ExactSplit, ExactSplit4)
 
 
 def make_integrator(name, system, tolerance=1e-6):

@@ -10,6 +10,7 @@ starve the second). The right-hand side is one compiled call.
 import numpy as np
 from scipy.integrate import RK45
 
+from rigid_sim.core import safeguards
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.runge_kutta import (body_momentum_derivative, from_body_axes,
                                                     to_body_axes)
@@ -27,6 +28,7 @@ class Dopri5(Integrator):
     name = 'dopri5'
     order = 5
     adaptive = True
+    bound = safeguards.UNBOUNDED   # its error control chooses the internal steps
 
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)

@@ -19,7 +19,6 @@ To write a new method, subclass :class:`Integrator`, set ``name``, ``order``, ``
 ``integrators/__init__.py``. Quaternions leave every step unit.
 """
 import numpy as np
-from rigid_sim.core import safeguards
 
 
 class Integrator:
@@ -28,7 +27,8 @@ class Integrator:
     name = ''
     order = 0          # global order of accuracy
     adaptive = False   # True: ``tolerance`` controls the error, not ``dt``
-    bound = safeguards.UNBOUNDED   # the largest step it takes unsplit (safeguards.StepBound)
+    # bound: the largest step it takes unsplit, a safeguards.StepBound that every method
+    # declares for itself (registration refuses one that does not).
     evaluations_per_step = 1       # wrench evaluations of one step
 
     def __init__(self, system, tolerance=1e-6):

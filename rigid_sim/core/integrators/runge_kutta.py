@@ -345,6 +345,7 @@ class ExplicitEuler(ExplicitRungeKutta):
     name = 'euler'
     order = 1
     tableau = FORWARD_EULER
+    bound = safeguards.UNBOUNDED
 
 
 class RK4World(ExplicitRungeKutta):
