@@ -45,10 +45,13 @@ def reference_frame(node, frame_id):
 
 
 class EntityServices:
-    """GetEntities, GetEntityState, GetEntitiesStates and SetEntityState of ``node``."""
+    """GetEntities, GetEntityState, GetEntitiesStates and SetEntityState of ``node``.
 
-    def __init__(self, node):
-        self._node = node
+    ``changed()`` is called after a state is set.
+    """
+
+    def __init__(self, node, changed):
+        self._node, self._changed = node, changed
         srv = si_srv
         for kind, name, callback in (
                 (srv.GetEntities, 'get_entities', self._on_entities),
@@ -142,5 +145,6 @@ class EntityServices:
         except ValueError as error:
             response.result = result(Result.RESULT_OPERATION_FAILED, f'twist: {error}')
             return response
+        self._changed()
         response.result = result(Result.RESULT_OK)
         return response

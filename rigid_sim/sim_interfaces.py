@@ -9,8 +9,9 @@ no wheel: where it is missing (a venv without ``rigid_sim_build_interfaces``) th
 once what it does not serve and how to add it, and runs without them.
 
 States: playing (not paused), paused, and stopped, which is paused at the initial state:
-the node starts stopped when it starts paused, and setting STOPPED pauses and resets
-everything (ResetSimulation's SCOPE_ALL). A step while playing is refused with
+the node starts stopped when it starts paused, setting STOPPED pauses and resets everything
+(ResetSimulation's SCOPE_ALL), and so does that reset while paused; a step, a set state, a
+spawn or a delete leaves it. A step while playing is refused with
 RESULT_INCORRECT_STATE. A step is a tick of ``time_step`` (``substeps`` integrator steps).
 """
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -73,8 +74,8 @@ class SimulationInterfaces:
         self._node = node
         self.stopped = node.paused   # started paused: at the initial state, stopped
         self.editor = SceneEditor(node)
-        self.entities = EntityServices(node)
-        self.spawns = SpawnServices(node, self.editor)
+        self.entities = EntityServices(node, self._left_start)
+        self.spawns = SpawnServices(node, self.editor, self._left_start)
         srv = si_srv
         for kind, name, callback in (
                 (srv.GetSimulatorFeatures, 'get_simulator_features', self._on_features),
@@ -87,12 +88,17 @@ class SimulationInterfaces:
                                    goal_callback=lambda goal: GoalResponse.ACCEPT,
                                    cancel_callback=lambda goal: CancelResponse.ACCEPT)
 
+    def _left_start(self):
+        self.stopped = False
+
     def state(self):
         """Return the SimulationState value now: playing, paused or stopped."""
         s = si_msg.SimulationState
         if not self._node.paused:
             return s.STATE_PLAYING
-        return s.STATE_STOPPED if self.stopped else s.STATE_PAUSED
+        # Time 0 too: a ~/step of the light route leaves the initial state as well.
+        stopped = self.stopped and self._node.world.time == 0.0
+        return s.STATE_STOPPED if stopped else s.STATE_PAUSED
 
     def _on_features(self, request, response, reply):
         response.features = features()
@@ -202,6 +208,7 @@ class SimulationInterfaces:
             if isinstance(outcome, Exception):
                 return done(outcome)
             reset_parts(node, state=bool(scope & r.SCOPE_STATE), time=bool(scope & r.SCOPE_TIME))
+            self.stopped = scope == r.SCOPE_ALL and node.paused
             done(None)
         if scope == r.SCOPE_ALL and self.editor.edited:
             self.spawns.restore_loaded(then)

@@ -39,7 +39,7 @@ except ImportError:   # sim_interfaces.serve never builds these services then
 # SpawnEntity's codes for the kinds of SpawnRefused.
 SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',
                'parse': 'RESOURCE_PARSE_ERROR', 'missing_asset': 'MISSING_ASSETS',
-               'pose': 'INVALID_POSE'}
+               'pose': 'INVALID_POSE', 'no_resource': 'NO_RESOURCE'}
 
 POLL = 0.01   # s of wall time between two looks at a running edit
 
@@ -165,10 +165,13 @@ def free_name(name, taken):
 
 
 class SpawnServices:
-    """SpawnEntity and DeleteEntity of ``node``, and the resets that undo edits."""
+    """SpawnEntity and DeleteEntity of ``node``, and the resets that undo edits.
 
-    def __init__(self, node, editor):
-        self._node, self._editor = node, editor
+    ``changed()`` is called after a spawn or a delete.
+    """
+
+    def __init__(self, node, editor, changed):
+        self._node, self._editor, self._changed = node, editor, changed
         deferred.create_service(node, si_srv.SpawnEntity, '~/spawn_entity', self._on_spawn)
         deferred.create_service(node, si_srv.DeleteEntity, '~/delete_entity', self._on_delete)
 
@@ -211,7 +214,7 @@ class SpawnServices:
                 if not default:
                     bodies = [placed(bodies[0], origin, orientation)]
             else:
-                raise SpawnRefused('parse', 'give a uri or a resource_string')
+                raise SpawnRefused('no_resource', 'give a uri or a resource_string')
             if name is not None:
                 bodies[0] = replace(bodies[0], name=name)
             if renaming:
@@ -239,6 +242,7 @@ class SpawnServices:
             else:
                 names = outcome[2]
                 self._editor.spawned.extend(names)
+                self._changed()
                 response.entity_name = ','.join(names)
                 response.result = result(si_msg.Result.RESULT_OK)
             reply(response)
@@ -261,9 +265,11 @@ class SpawnServices:
             return new, kept, f'{dropped} springs went with it' if dropped else ''
 
         def done(outcome):
-            response.result = (result(Result.RESULT_OPERATION_FAILED, str(outcome))
-                               if isinstance(outcome, SpawnRefused) else
-                               result(Result.RESULT_OK, outcome[2]))
+            failed = isinstance(outcome, SpawnRefused)
+            response.result = (result(Result.RESULT_OPERATION_FAILED, str(outcome)) if failed
+                               else result(Result.RESULT_OK, outcome[2]))
+            if not failed:
+                self._changed()
             reply(response)
         self._editor.submit(build, done)
         return deferred.LATER

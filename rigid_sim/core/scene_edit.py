@@ -25,8 +25,9 @@ from rigid_sim.core.scene_fields import Mistake, token
 from rigid_sim.core.scene_file import FileRefused, parse_yaml
 from rigid_sim.core.scene_limits import Budget
 
-# What a refusal is about: the name, the text or file, an asset it names, or the pose.
-KINDS = ('name_taken', 'name_invalid', 'parse', 'missing_asset', 'pose')
+# What a refusal is about: the name, the text or file, an asset it names, the pose, or
+# that nothing was given.
+KINDS = ('name_taken', 'name_invalid', 'parse', 'missing_asset', 'pose', 'no_resource')
 
 
 class SpawnRefused(ValueError):
