@@ -203,6 +203,7 @@ class SimulationInterfaces:
         r = si_srv.ResetSimulation.Request
         scope = r.SCOPE_ALL if scope == r.SCOPE_DEFAULT else scope
         node = self._node
+        node.loop.end_jobs('ended by ~/reset_simulation')   # as ~/reset ends them
 
         def then(outcome):
             if isinstance(outcome, Exception):
