@@ -201,16 +201,18 @@ class SpawnServices:
         name = check_name(request.name) if request.name else None
         origin, orientation, default = self._placement(request)
         uri, text, renaming = request.uri, request.resource_string, request.allow_renaming
+        limits = self._node.settings.resource_limits   # the operator's, as for the scene
 
         def build(scene):
             if uri:
-                bodies, springs = bodies_from_file(scene_path(uri))
+                bodies, springs = bodies_from_file(scene_path(uri), **limits)
                 if name is not None and len(bodies) > 1:
                     raise SpawnRefused('name_invalid', f'name names one body; {shown(uri)} '
                                                        f'has {len(bodies)}: leave it empty')
                 bodies = [placed(body, origin, orientation, compose=True) for body in bodies]
             elif text:
-                bodies, springs = [body_from_text(text, scene, name)], ()
+                bodies = [body_from_text(text, scene, name, limits['max_scene_bytes'])]
+                springs = ()
                 if not default:
                     bodies = [placed(bodies[0], origin, orientation)]
             else:
@@ -229,6 +231,11 @@ class SpawnServices:
 
     def _on_spawn(self, request, response, reply):
         codes = si_srv.SpawnEntity.Response
+        if request.entity_namespace:
+            response.result = result(si_msg.Result.RESULT_FEATURE_UNSUPPORTED,
+                                     'entity_namespace: a body\'s topics are ~/<name>/...; '
+                                     'leave it empty')
+            return response
         try:
             build = self._spawn_builder(request)
         except SpawnRefused as refused:

@@ -20,7 +20,7 @@ from rclpy.node import Node
 from simulation_interfaces import srv
 from simulation_interfaces.action import SimulateSteps
 
-from ros_harness import TIMEOUT, spin_until
+from ros_tools import TIMEOUT, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery

@@ -71,18 +71,17 @@ def test_static_transforms_place_every_point_and_imu_frame_on_its_body():
         assert (r.x, r.y, r.z, r.w) == (0.0, 0.0, 0.0, 1.0)
 
 
-def test_tf_carries_every_body_pose_and_tf_static_every_point_frame(harness, write_scene):
+def test_tf_carries_every_body_pose_and_tf_static_every_point_frame(rigid_sim):
     """/tf has world -> body at the published poses; /tf_static, latched, the point frames."""
     from tf2_msgs.msg import TFMessage
     from rigid_sim.tf_output import STATIC_QOS, TF_QOS
-    sim = harness(write_scene(SCENE), frame_prefix='sim1/')
+    sim = rigid_sim(yaml=SCENE, frame_prefix='sim1/')
+    probe = ros_tools.Probe(sim, 'box')
     received = {'/tf': [], '/tf_static': []}
     for topic, qos in (('/tf', TF_QOS), ('/tf_static', STATIC_QOS)):
-        sim.probe.create_subscription(TFMessage, topic, received[topic].append, qos)
-    spin_until(sim.executor, lambda: received['/tf_static'], what='/tf_static received')
-    sim.sim.refresh_listeners()
-    sim.tick(1)
-    spin_until(sim.executor, lambda: received['/tf'], what='/tf received')
+        probe.node.create_subscription(TFMessage, topic, received[topic].append, qos)
+    sim.node.refresh_listeners()
+    sim.step(1)
     statics = {(t.header.frame_id, t.child_frame_id)
                for t in received['/tf_static'][-1].transforms}
     assert ('sim1/box', 'sim1/box/thruster') in statics and len(statics) == 4
@@ -90,7 +89,7 @@ def test_tf_carries_every_body_pose_and_tf_static_every_point_frame(harness, wri
     assert (box.header.frame_id, box.child_frame_id, ball.child_frame_id) == (
         'world', 'sim1/box', 'sim1/ball')
     t, r = box.transform.translation, box.transform.rotation
-    pose = sim.latest('box/pose')
+    pose = probe.latest('box/pose')
     p, q = pose.pose.position, pose.pose.orientation
     assert box.header.stamp == pose.header.stamp
     assert (t.x, t.y, t.z, r.x, r.y, r.z, r.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)

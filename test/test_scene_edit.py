@@ -90,10 +90,10 @@ def test_spawns_are_held_to_the_scene_names_limits_and_poses():
     assert turned.value.kind == 'pose'
 
 
-def test_a_scene_edit_is_built_off_the_executor_while_the_node_ticks(harness, write_scene):
+def test_a_scene_edit_is_built_off_the_executor_while_the_node_ticks(rigid_sim):
     """While an edit's build waits, the node ticks and answers; then the edit is swapped in."""
-    sim = harness(write_scene(SCENE))
-    editor = sim.sim.sim_interfaces.editor
+    sim = rigid_sim(yaml=SCENE)
+    editor = sim.node.sim_interfaces.editor
     release, outcomes = threading.Event(), []
 
     def build(scene):
@@ -101,8 +101,8 @@ def test_a_scene_edit_is_built_off_the_executor_while_the_node_ticks(harness, wr
         new, _ = without_body(scene, 0)
         return new, [(1, 0), (2, 1)], ''
     editor.submit(build, outcomes.append)
-    sim.tick(3)   # the executor is free: ticks run and are received
-    assert not outcomes and sim.sim.world.bodies.names == ('a', 'b', 'c')
+    assert sim.step(3) == pytest.approx(3 * sim.node.settings.time_step)   # not stalled
+    assert not outcomes and sim.node.world.bodies.names == ('a', 'b', 'c')
     release.set()
     assert editor.wait(30.0)
-    assert sim.sim.world.bodies.names == ('b', 'c') and outcomes[0][2] == ''
+    assert sim.node.world.bodies.names == ('b', 'c') and outcomes[0][2] == ''

@@ -163,6 +163,8 @@ def test_spawn_refusals_use_the_standard_codes(stopped):
     assert spawn(sim, 'ball', mesh).result.result == codes.MISSING_ASSETS
     assert spawn(sim, '1ball', BALL).result.result == codes.NAME_INVALID
     assert spawn(sim, 'ball').result.result == codes.NO_RESOURCE
+    spaced = sim.call('spawn_entity', name='ball', resource_string=BALL, entity_namespace='ns')
+    assert spaced.result.result == Result.RESULT_FEATURE_UNSUPPORTED
     unknown_frame = spawn(sim, 'ball', BALL, frame_id='nowhere').result
     assert unknown_frame.result == codes.INVALID_POSE and 'nowhere' in unknown_frame.error_message
     assert sim.call('get_entities').entities == ['box', 'plate', 'box_1']
@@ -260,6 +262,8 @@ def test_simulate_steps_gives_feedback_per_step_and_can_be_cancelled(stopped):
     outcome = goal.result().get_result_async()
     sim.until(outcome.done, 'result')
     assert outcome.result().result.result.result == OK
+    # Feedback is a topic and the result a service: the last feedback may come after it.
+    sim.until(lambda: len(feedback) >= 5, 'five feedback messages')
     assert [(f.feedback.completed_steps, f.feedback.remaining_steps) for f in feedback] == [
         (n, 5 - n) for n in range(1, 6)]
     assert state_of(sim, 'box')[4] == pytest.approx(5 * DT, abs=1e-12)

@@ -22,7 +22,7 @@ from rigid_sim.core import body_state, rotation
 from rigid_sim.core.scene import (
     load_scene, parse_body, SceneError, world_frame_clash)
 from rigid_sim.core.scene_fields import Mistake, token
-from rigid_sim.core.scene_file import FileRefused, parse_yaml
+from rigid_sim.core.scene_file import FileRefused, MAX_SCENE_BYTES, parse_yaml
 from rigid_sim.core.scene_limits import Budget
 
 # What a refusal is about: the name, the text or file, an asset it names, the pose, or
@@ -52,15 +52,16 @@ def check_name(name, where='name'):
         raise SpawnRefused('name_invalid', f'{mistake.key}: {mistake.reason}') from None
 
 
-def body_from_text(text, scene, name=None, where='resource_string', base_dir='.'):
+def body_from_text(text, scene, name=None, max_bytes=MAX_SCENE_BYTES, base_dir='.'):
     """One :class:`BodySpec` from ``text``, a body entry of the scene format (YAML).
 
     ``name``, when given, replaces the entry's own. The entry is checked as an item of a
-    scene's ``bodies:`` would be, within ``scene``'s limits; a mesh file is relative to
-    ``base_dir``. Raises SpawnRefused.
+    scene's ``bodies:`` would be, within ``scene``'s limits, and ``text`` is at most
+    ``max_bytes`` long; a mesh file is relative to ``base_dir``. Raises SpawnRefused.
     """
+    where = 'resource_string'
     try:
-        entry = parse_yaml(text)
+        entry = parse_yaml(text, max_bytes)
     except FileRefused as refused:
         raise SpawnRefused('parse', f'{where}: {refused.where}: {refused.reason}') from None
     if not isinstance(entry, dict):
@@ -76,13 +77,14 @@ def body_from_text(text, scene, name=None, where='resource_string', base_dir='.'
                                         mistake.reason)) from None
 
 
-def bodies_from_file(path):
+def bodies_from_file(path, **limits):
     """Return the bodies and springs of the scene file at ``path``, by the scene loader.
 
+    ``limits`` are the operator's, as :func:`rigid_sim.core.scene.load_scene` takes them.
     Returns (bodies, springs): springs index the file's own bodies. Raises SpawnRefused.
     """
     try:
-        loaded = load_scene(path)
+        loaded = load_scene(path, **limits)
     except SceneError as error:
         raise _parse_refusal(error) from None
     return loaded.bodies, loaded.effects.get('springs', ())
