@@ -15,10 +15,7 @@ from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
 from rigid_sim.core.text import clipped, shown
 
-try:
-    from simulation_interfaces import msg as si_msg, srv as si_srv
-except ImportError:   # sim_interfaces.serve never builds these services then
-    si_msg = si_srv = None
+from simulation_interfaces import msg as si_msg, srv as si_srv
 
 # Characters of an answer's error_message: its outside text is quoted cut already.
 MESSAGE_LIMIT = 1000

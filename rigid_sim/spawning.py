@@ -31,10 +31,7 @@ from rigid_sim.core.text import shown
 from rigid_sim.entity_services import reference_frame, result
 from rigid_sim.resources import find_scene
 
-try:
-    from simulation_interfaces import msg as si_msg, srv as si_srv
-except ImportError:   # sim_interfaces.serve never builds these services then
-    si_msg = si_srv = None
+from simulation_interfaces import msg as si_msg, srv as si_srv
 
 # SpawnEntity's codes for the kinds of SpawnRefused.
 SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',

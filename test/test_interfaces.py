@@ -139,3 +139,24 @@ def test_a_package_found_outside_the_prefix_is_left_to_its_install(tmp_path):
     assert elsewhere is not None and elsewhere.name == 'tf2_msgs'
     assert 'rosidl_generator_py' in interface_build.missing_build_wheels(tmp_path)
     assert interface_build.missing_build_wheels(sys.prefix) == []
+
+
+def test_node_without_simulation_interfaces_says_once_what_it_does_not_serve(
+        ros_context, write_scene, capfd, monkeypatch):
+    """Where the package is missing the node runs, serving none of it, and says how to add it."""
+    import importlib.util
+    from rigid_sim.node import RigidSimNode
+    found = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, 'find_spec', lambda name, *rest: None
+                        if name == 'simulation_interfaces' else found(name, *rest))
+    scene = write_scene('bodies: [{name: box, shape: {type: sphere, radius: 0.1}, mass: 1.0}]')
+    node = RigidSimNode(context=ros_context, cli_args=['--ros-args', '-p', f'scene:={scene}'])
+    try:
+        assert node.sim_interfaces is None
+        assert not [name for name, _ in node.get_service_names_and_types_by_node(
+            'rigid_sim', '/') if name.endswith('step_simulation')]
+        said = capfd.readouterr().err
+        assert said.count('simulation_interfaces is not installed') == 1
+        assert '~/spawn_entity' in said and 'rigid_sim_build_interfaces' in said
+    finally:
+        node.destroy_node()
