@@ -69,6 +69,11 @@ class SimProcess:
                                               for c in self.clients.values()),
                    START_TIMEOUT, 'the simulation_interfaces services')
         assert self.action.wait_for_server(timeout_sec=TIMEOUT)
+        # The server is ready once its services are; feedback sent before the topic is
+        # matched would be lost.
+        feedback = f'{self.prefix}/simulate_steps/_action/feedback'
+        spin_until(self.executor, lambda: self.node.count_publishers(feedback) >= 1,
+                   TIMEOUT, 'the action feedback topic')
 
     def call(self, service, **fields):
         """Call ``service`` (a name in SERVICES) with request ``fields``; the response."""
