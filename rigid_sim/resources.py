@@ -1,6 +1,6 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""Finding the packaged configuration: source tree, pip install and colcon install alike.
+"""Finding packaged data (config, interfaces): source tree, pip and colcon install alike.
 
 ``config/`` is installed to ``share/rigid_sim/config``. Where that share directory is
 depends on how the package was installed:
@@ -43,6 +43,17 @@ def config_directories():
     list of Path
         Existing directories only.
     """
+    return packaged_directories('config')
+
+
+def packaged_directories(folder):
+    """Directories that may hold the packaged ``folder`` (``config``, ``interfaces``).
+
+    Returns
+    -------
+    list of Path
+        Existing directories only, most specific first.
+    """
     source_tree = _PACKAGE_DIR.parent
     # <prefix>/lib/python3.X/site-packages/rigid_sim -> <prefix>
     install_prefix = _PACKAGE_DIR.parents[3] if len(_PACKAGE_DIR.parents) > 3 else None
@@ -54,8 +65,8 @@ def config_directories():
     candidates.append(Path(sys.prefix) / 'share' / PACKAGE)
     found = []
     for share in candidates:
-        if share is not None and (share / 'config').is_dir() and share / 'config' not in found:
-            found.append(share / 'config')
+        if share is not None and (share / folder).is_dir() and share / folder not in found:
+            found.append(share / folder)
     return found
 
 

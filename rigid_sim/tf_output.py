@@ -2,12 +2,15 @@
 # SPDX-License-Identifier: Apache-2.0
 """/tf and /tf_static, where tf2_msgs is installed.
 
-tf2_msgs comes with every ROS install but has no wheel for a pip-only machine, so it is
-imported optionally: without it the node logs once that tf is off and publishes the same
-poses on its other topics. The transforms themselves are geometry_msgs/TransformStamped,
+tf2_msgs comes with every ROS install but has no wheel for a pip-only machine, where
+``rigid_sim_build_interfaces`` builds it into the venv; it is imported optionally: without it
+the node logs once that tf is off, and how to add it, and publishes the same poses on its
+other topics. The transforms themselves are geometry_msgs/TransformStamped,
 built in :mod:`rigid_sim.conversions`; only their wrapping into a TFMessage lives here.
 """
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from rigid_sim.interface_build import HOW_TO_ADD
 
 try:
     from tf2_msgs.msg import TFMessage
@@ -35,7 +38,7 @@ class TfOutput:
         self.dynamic = self._static = None
         if not self.available:
             node.get_logger().info('tf2_msgs is not installed: /tf and /tf_static are off '
-                                   '(poses are on ~/poses and ~/<body>/pose)')
+                                   f'(poses are on ~/poses and ~/<body>/pose); {HOW_TO_ADD}')
             return
         self.dynamic = node.qos_overrides.create_publisher(TFMessage, '/tf', TF_QOS)
         self._static = node.qos_overrides.create_publisher(TFMessage, '/tf_static', STATIC_QOS)

@@ -9,6 +9,7 @@ discovery further, to OFF. The node is driven through the public test kit (the
 ``rigid_sim`` fixture of rigid_sim.testing); ``ros_tools.py`` builds the messages a test's
 own node sends and reads what it heard.
 """
+import importlib.util
 import os
 import shutil
 import tempfile
@@ -22,6 +23,19 @@ os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated, and it overrides the r
 os.environ.pop('ROS_STATIC_PEERS', None)
 os.environ['ROS_LOG_DIR'] = ROS_LOG_DIR
 os.environ['RCUTILS_LOGGING_BUFFERED_STREAM'] = '0'  # a node process's lines arrive at once
+
+
+def pytest_configure(config):
+    """Refuse to start without the generated simulation_interfaces and tf2_msgs types.
+
+    The tests use the real types, never stand-ins; on the pip route they come from
+    ``rigid_sim_build_interfaces``, which the README's test command runs.
+    """
+    missing = [name for name in ('simulation_interfaces', 'tf2_msgs')
+               if importlib.util.find_spec(name) is None]
+    if missing:
+        raise pytest.UsageError(f'{" and ".join(missing)} not installed: run '
+                                '.venv/bin/rigid_sim_build_interfaces (README, test command)')
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Frames: the transforms for tf, frame_prefix, and markers cleared on a scene reload.
 
-tf2_msgs has no wheel here, so the TransformStamped lists are checked as built (their
-wrapping into a TFMessage is the one untested line); the node is checked to run without it.
+/tf and /tf_static are received as TFMessages built from the Jazzy definitions
+(``rigid_sim_build_interfaces``); the node is also checked to run without tf2_msgs.
 """
 import numpy as np
 import pytest
@@ -71,14 +71,45 @@ def test_static_transforms_place_every_point_and_imu_frame_on_its_body():
         assert (r.x, r.y, r.z, r.w) == (0.0, 0.0, 0.0, 1.0)
 
 
-def test_node_runs_without_tf2_msgs_and_says_so_once(ros_context, write_scene, capfd):
+def test_tf_carries_every_body_pose_and_tf_static_every_point_frame(rigid_sim):
+    """/tf has world -> body at the published poses; /tf_static, latched, the point frames."""
+    from tf2_msgs.msg import TFMessage
+    from rigid_sim.tf_output import STATIC_QOS, TF_QOS
+    sim = rigid_sim(yaml=SCENE, frame_prefix='sim1/')
+    probe = ros_tools.Probe(sim, 'box')
+    received = {'/tf': [], '/tf_static': []}
+    for topic, qos in (('/tf', TF_QOS), ('/tf_static', STATIC_QOS)):
+        probe.node.create_subscription(TFMessage, topic, received[topic].append, qos)
+    sim.node.refresh_listeners()
+    sim.step(1)
+    statics = {(t.header.frame_id, t.child_frame_id)
+               for t in received['/tf_static'][-1].transforms}
+    assert ('sim1/box', 'sim1/box/thruster') in statics and len(statics) == 4
+    box, ball = received['/tf'][-1].transforms
+    assert (box.header.frame_id, box.child_frame_id, ball.child_frame_id) == (
+        'world', 'sim1/box', 'sim1/ball')
+    t, r = box.transform.translation, box.transform.rotation
+    pose = probe.latest('box/pose')
+    p, q = pose.pose.position, pose.pose.orientation
+    assert box.header.stamp == pose.header.stamp
+    assert (t.x, t.y, t.z, r.x, r.y, r.z, r.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
+    assert [t.x, t.y, t.z] == [1.0, 2.0, 3.0]  # spinning in place about z
+
+
+def test_node_runs_without_tf2_msgs_and_says_how_to_add_it_once(
+        ros_context, write_scene, capfd, monkeypatch):
+    """Where tf2_msgs is missing (a venv without the interface build) tf is off, once said."""
+    from rigid_sim import tf_output
+    monkeypatch.setattr(tf_output, 'TFMessage', None)
     node = RigidSimNode(context=ros_context, cli_args=['--ros-args', '-p',
                                                        f'scene:={write_scene(SCENE)}'])
     node.loop.stop()
     for _ in range(3):
         node.tick()
     assert not node.outputs.tf_available
-    assert capfd.readouterr().err.count('/tf and /tf_static are off') == 1
+    said = capfd.readouterr().err
+    assert said.count('/tf and /tf_static are off') == 1
+    assert 'rigid_sim_build_interfaces' in said
     node.destroy_node()
 
 

@@ -89,6 +89,18 @@ def test_ci_runs_exactly_the_readme_test_command():
     ci_lines = (ROOT / '.ci' / 'run').read_text().splitlines()
     test_command = next(line for line in ci_lines if 'pytest' in line)
     assert test_command.strip() in readme.splitlines()
+    # The suite speaks simulation_interfaces and tf2_msgs: the command builds them first.
+    assert 0 < test_command.index('rigid_sim_build_interfaces') < test_command.index('pytest')
+
+
+def test_readme_run_command_builds_no_interfaces_and_says_how_to_add_them():
+    """The run command stays as fast as before; the README gives the one command to add."""
+    readme = (ROOT / 'README.md').read_text().splitlines()
+    run_command, = (line for line in readme if line.startswith('python3 -m venv')
+                    and 'rigid_sim_node' in line)
+    assert "'.[ros]'" in run_command and 'interfaces' not in run_command
+    add = ".venv/bin/pip install -e '.[interfaces]' && .venv/bin/rigid_sim_build_interfaces"
+    assert add in readme
 
 
 def test_readme_names_every_integrator_and_parameter():

@@ -9,7 +9,7 @@ what it says or nothing at all. Only the effects a scene lists are built: an unl
 costs nothing while stepping.
 """
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -75,6 +75,9 @@ class Scene:
     bodies: tuple       # of BodySpec, in file order
     effects: dict
     magnetic_field: np.ndarray = None   # (3,) T, world axes; None: not given
+    # Work limits in force (the operator's, lowered by the file's limits:): bodies spawned
+    # later are held to them too.
+    work_limits: dict = field(default_factory=lambda: dict(WORK_LIMITS))
 
 
 SHAPES = {
@@ -88,7 +91,7 @@ INERTIA = {'method': (choice(*INERTIA_METHODS), ABSENT),
            'samples': (count, ABSENT),
            'given': (table(GIVEN), ABSENT), **GIVEN}
 ZERO = [0.0, 0.0, 0.0]
-# Shape and inertia arrive raw: their valid keys depend on their type, checked in _body.
+# Shape and inertia arrive raw: their valid keys depend on their type, checked in parse_body.
 BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
         'mass': (positive, ABSENT), 'density': (positive, ABSENT), 'inertia': (raw, {}),
         'pose': (table({'position': (vector, ZERO),
@@ -110,7 +113,7 @@ SCENE = {'world_frame': (token, 'world'),
                            **{name: (count, ABSENT) for name in WORK_LIMITS}}), {}),
          'effects': (table(EFFECTS), {}),
          'magnetic_field': (vector, ABSENT),   # read by magnetometers only, T
-         # Raw here; _body checks each, as it needs the scene's directory.
+         # Raw here; parse_body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
 
 
@@ -165,10 +168,11 @@ def _inertia(value, key):
     return inertia
 
 
-def _body(value, key, budget, has_field):
+def parse_body(value, key, budget, has_field):
     """One :class:`BodySpec` from its scene entry, within the scene's work ``budget``.
 
-    ``has_field``: whether the scene gives a magnetic field (for magnetometers).
+    ``has_field``: whether the scene gives a magnetic field (for magnetometers). Raises
+    Mistake naming the entry's ``key`` path and the reason.
     """
     body = fields(value, key, BODY)
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
@@ -200,7 +204,7 @@ def _bodies(entries, world_frame, budget, has_field):
         raise Mistake('bodies', 'expected a non-empty list of bodies, got an empty one')
     if len(entries) > budget.limits['max_bodies']:
         raise Mistake('bodies', f'{len(entries)} bodies, {budget.above("max_bodies")}')
-    bodies = tuple(_body(entry, f'bodies[{i}]', budget, has_field)
+    bodies = tuple(parse_body(entry, f'bodies[{i}]', budget, has_field)
                    for i, entry in enumerate(entries))
     clash = world_frame_clash(bodies, world_frame)
     if clash is not None:
@@ -320,7 +324,8 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
     except Mistake as mistake:
         raise SceneError(path, mistake.key, mistake.reason) from None
     return Scene(path=str(path), world_frame=scene['world_frame'], bodies=bodies,
-                 effects=effects, magnetic_field=field, **scene['limits'])
+                 effects=effects, magnetic_field=field, work_limits=budget.limits,
+                 **scene['limits'])
 
 
 def load_scene(path, **limits):

@@ -201,7 +201,17 @@ def load_yaml(path, max_bytes=MAX_SCENE_BYTES, limit_note=''):
         Naming the position (or ``(file)``) and the reason: not a regular file, too big,
         not UTF-8, nested too deep, too many nodes, or invalid YAML.
     """
-    text = read_text(path, max_bytes, 'scene file', limit_note)
+    return parse_yaml(read_text(path, max_bytes, 'scene file', limit_note))
+
+
+def parse_yaml(text, max_bytes=MAX_SCENE_BYTES):
+    """Parse a YAML document given as text (a scene's, or one body entry), within the limits.
+
+    Raises FileRefused as :func:`load_yaml` does, for all but the file checks.
+    """
+    if len(text) > max_bytes:
+        raise FileRefused('(text)', f'{len(text)} characters, above the limit of '
+                                    f'{max_bytes} bytes of a scene')
     try:
         check_structure(text)
         return yaml.load(text, Loader=SceneLoader)

@@ -1,0 +1,300 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Scene edits at runtime: bodies spawned and deleted, a scene put back, never a stalled tick.
+
+An edit builds a new Scene and World (:mod:`rigid_sim.core.scene_edit`): reading a mesh,
+computing inertias and compiling the kernels of a new effect set may take seconds, so that
+part runs in a worker thread while the running world ticks on, and the executor looks every
+``POLL`` seconds whether it is done. Then, between two ticks, the stored input messages are
+applied to the running world, its state, time and held wrenches are carried into the new one
+and the node runs the new scene: a spawned body has every per-body topic from that tick on,
+a deleted one has none. Edits run one at a time, in the order they were asked for; each is
+answered when it has been swapped in, or refused with the reason.
+"""
+from collections import deque
+from dataclasses import replace
+import itertools
+from pathlib import Path
+import threading
+from urllib.parse import unquote, urlparse
+
+import numpy as np
+from rclpy.clock import Clock, ClockType
+
+from rigid_sim import conversions, deferred
+from rigid_sim.core import body_state
+from rigid_sim.core.scene import build_world
+from rigid_sim.core.scene_edit import (
+    bodies_from_file, body_from_text, carry_over, check_name, placed, SpawnRefused,
+    with_bodies, without_body)
+from rigid_sim.core.text import shown
+from rigid_sim.entity_services import reference_frame, result
+from rigid_sim.resources import find_scene
+
+from simulation_interfaces import msg as si_msg, srv as si_srv
+
+# SpawnEntity's codes for the kinds of SpawnRefused.
+SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',
+               'parse': 'RESOURCE_PARSE_ERROR', 'missing_asset': 'MISSING_ASSETS',
+               'pose': 'INVALID_POSE', 'no_resource': 'NO_RESOURCE'}
+
+POLL = 0.01   # s of wall time between two looks at a running edit
+
+
+class Edit:
+    """One scene edit: ``build(scene)`` off the executor, then ``done(result)`` on it.
+
+    ``build`` returns (new scene, kept, note): ``kept`` pairs old and new body indices,
+    ``note`` words the answer. ``done`` gets ``(scene, world, note)`` or the SpawnRefused.
+    """
+
+    def __init__(self, build, done):
+        self.build, self.done = build, done
+        self.result = None
+        self.finished = threading.Event()
+
+
+class SceneEditor:
+    """Runs :class:`Edit` s for ``node`` (a RigidSimNode) in a worker, swaps at a tick boundary.
+
+    Also remembers which bodies were spawned and the scene as loaded, for the resets of
+    ResetSimulation.
+    """
+
+    def __init__(self, node):
+        self._node = node
+        self._queue = deque()
+        self._running = None
+        self._edited = None      # the last scene an edit made, while it runs
+        self.loaded = None       # the scene before the first edit (a reload forgets edits)
+        self.spawned = []        # names of the bodies spawned into the running scene
+        self._poll = node.create_timer(POLL, self._on_poll,
+                                       clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self._poll.cancel()
+
+    @property
+    def edited(self):
+        """Whether the running scene is one an edit made (not reloaded since)."""
+        return self._edited is not None and self._edited is self._node.scene
+
+    def submit(self, build, done):
+        """Queue an edit; it starts when the ones before it are done."""
+        self._queue.append(Edit(build, done))
+        if self._running is None:
+            self._start()
+
+    def _start(self):
+        edit = self._running = self._queue.popleft()
+        node = self._node
+        scene, settings, logger = node.scene, node.settings, node.get_logger()
+
+        def work():
+            try:
+                new_scene, kept, note = edit.build(scene)
+                world = build_world(new_scene, settings.integrator, settings.tolerance)
+                from rigid_sim.node import warm_up   # the node imports this module
+                warm_up(world, settings.integrator, logger)
+                edit.result = (scene, new_scene, world, kept, note)
+            except SpawnRefused as refused:
+                edit.result = refused
+            except Exception as error:  # noqa: B902  any failure refuses the edit, never raises
+                edit.result = SpawnRefused('parse', f'{type(error).__name__}: {error}')
+            edit.finished.set()
+
+        threading.Thread(target=work, daemon=True, name='rigid_sim scene edit').start()
+        self._poll.reset()
+
+    def _on_poll(self):
+        edit = self._running
+        if edit is None or not edit.finished.is_set():
+            return
+        self._running = None
+        self._poll.cancel()
+        edit.done(self._swap(edit.result))
+        if self._queue:
+            self._start()
+
+    def _swap(self, result):
+        """Run the edit's scene from the next tick on; the (scene, world, note) or a refusal."""
+        if isinstance(result, SpawnRefused):
+            return result
+        base, scene, world, kept, note = result
+        node = self._node
+        if node.scene is not base:   # a parameter reload replaced the scene meanwhile
+            return SpawnRefused('parse', 'the scene was reloaded while the edit was prepared; '
+                                         'nothing changed, ask again')
+        if not self.edited:
+            self.loaded, self.spawned = base, []
+        node.inputs.apply(node.world, node.scene, node.settings)   # nothing received is lost
+        carry_over(node.world, world, kept)
+        self._edited = scene
+        node.replace_scene(scene, world)
+        names = {body.name for body in scene.bodies}
+        self.spawned = [name for name in self.spawned if name in names]
+        return scene, world, note
+
+    def wait(self, timeout=None):
+        """Block until every queued edit is swapped in or refused (tests that tick themselves)."""
+        while self._running is not None:
+            if not self._running.finished.wait(timeout):
+                return False
+            self._on_poll()
+        return True
+
+
+def scene_path(uri):
+    """Return the file a SpawnEntity ``uri`` names: a path, file:// URI or packaged scene."""
+    parsed = urlparse(uri)
+    if parsed.scheme == 'file':
+        return Path(unquote(parsed.path))
+    if parsed.scheme and len(parsed.scheme) > 1:   # not a Windows drive letter
+        raise SpawnRefused('parse', f'uri {shown(uri)}: only file paths and file:// URIs')
+    try:
+        return find_scene(uri)
+    except FileNotFoundError as error:
+        raise SpawnRefused('missing_asset', str(error)) from None
+
+
+def free_name(name, taken):
+    """``name``, or ``name_1``, ``name_2``, ... the first not in ``taken``."""
+    candidates = itertools.chain([name], (f'{name}_{n}' for n in itertools.count(1)))
+    return next(candidate for candidate in candidates if candidate not in taken)
+
+
+class SpawnServices:
+    """SpawnEntity and DeleteEntity of ``node``, and the resets that undo edits.
+
+    ``changed()`` is called after a spawn or a delete.
+    """
+
+    def __init__(self, node, editor, changed):
+        self._node, self._editor, self._changed = node, editor, changed
+        deferred.create_service(node, si_srv.SpawnEntity, '~/spawn_entity', self._on_spawn)
+        deferred.create_service(node, si_srv.DeleteEntity, '~/delete_entity', self._on_delete)
+
+    def _placement(self, request):
+        """(origin, orientation, is_default) of ``initial_pose`` in world, or SpawnRefused."""
+        stamped = request.initial_pose
+        origin, orientation = conversions.pose_arrays(stamped.pose)
+        default = not origin.any() and np.array_equal(orientation, [0.0, 0.0, 0.0, 1.0])
+        try:
+            frame = reference_frame(self._node, stamped.header.frame_id)
+            if not np.all(np.isfinite(origin)):
+                raise ValueError(f'non-finite position {origin.tolist()}')
+            orientation = body_state.unit_quaternion(orientation)
+        except KeyError as error:
+            raise SpawnRefused('pose', f'initial_pose: {error.args[0]}') from None
+        except ValueError as error:
+            raise SpawnRefused('pose', f'initial_pose: {error}') from None
+        if frame is not None:
+            zero = np.zeros(3)
+            origin, orientation, _, _ = body_state.seen_in_world(
+                frame, (origin, orientation, zero, zero))
+            default = False
+        return origin, orientation, default
+
+    def _spawn_builder(self, request):
+        """Return the edit's build for ``request``, checking its name and pose now."""
+        name = check_name(request.name) if request.name else None
+        origin, orientation, default = self._placement(request)
+        uri, text, renaming = request.uri, request.resource_string, request.allow_renaming
+        limits = self._node.settings.resource_limits   # the operator's, as for the scene
+
+        def build(scene):
+            if uri:
+                bodies, springs = bodies_from_file(scene_path(uri), **limits)
+                if name is not None and len(bodies) > 1:
+                    raise SpawnRefused('name_invalid', f'name names one body; {shown(uri)} '
+                                                       f'has {len(bodies)}: leave it empty')
+                bodies = [placed(body, origin, orientation, compose=True) for body in bodies]
+            elif text:
+                bodies = [body_from_text(text, scene, name, limits['max_scene_bytes'])]
+                springs = ()
+                if not default:
+                    bodies = [placed(bodies[0], origin, orientation)]
+            else:
+                raise SpawnRefused('no_resource', 'give a uri or a resource_string')
+            if name is not None:
+                bodies[0] = replace(bodies[0], name=name)
+            if renaming:
+                taken = {body.name for body in scene.bodies}
+                for index, body in enumerate(bodies):
+                    bodies[index] = replace(body, name=free_name(body.name, taken))
+                    taken.add(bodies[index].name)
+            new = with_bodies(scene, bodies, springs)
+            count = len(scene.bodies)
+            return new, [(i, i) for i in range(count)], [body.name for body in bodies]
+        return build
+
+    def _on_spawn(self, request, response, reply):
+        codes = si_srv.SpawnEntity.Response
+        if request.entity_namespace:
+            response.result = result(si_msg.Result.RESULT_FEATURE_UNSUPPORTED,
+                                     'entity_namespace: a body\'s topics are ~/<name>/...; '
+                                     'leave it empty')
+            return response
+        try:
+            build = self._spawn_builder(request)
+        except SpawnRefused as refused:
+            response.result = result(getattr(codes, SPAWN_CODES[refused.kind]), str(refused))
+            return response
+
+        def done(outcome):
+            if isinstance(outcome, SpawnRefused):
+                response.result = result(getattr(codes, SPAWN_CODES[outcome.kind]),
+                                         str(outcome))
+            else:
+                names = outcome[2]
+                self._editor.spawned.extend(names)
+                self._changed()
+                response.entity_name = ','.join(names)
+                response.result = result(si_msg.Result.RESULT_OK)
+            reply(response)
+        self._editor.submit(build, done)
+        return deferred.LATER
+
+    def _on_delete(self, request, response, reply):
+        Result = si_msg.Result
+        names = self._node.world.bodies.names
+        if request.entity not in names:
+            response.result = result(Result.RESULT_NOT_FOUND,
+                                     f'no entity {shown(request.entity)}')
+            return response
+        entity = request.entity
+
+        def build(scene):
+            index = [body.name for body in scene.bodies].index(entity)
+            new, dropped = without_body(scene, index)
+            kept = [(i, i - (i > index)) for i in range(len(scene.bodies)) if i != index]
+            return new, kept, f'{dropped} springs went with it' if dropped else ''
+
+        def done(outcome):
+            failed = isinstance(outcome, SpawnRefused)
+            response.result = (result(Result.RESULT_OPERATION_FAILED, str(outcome)) if failed
+                               else result(Result.RESULT_OK, outcome[2]))
+            if not failed:
+                self._changed()
+            reply(response)
+        self._editor.submit(build, done)
+        return deferred.LATER
+
+    def restore_loaded(self, done):
+        """Put back the scene as loaded before the first edit; ``done(outcome)``."""
+        loaded = self._editor.loaded
+
+        def build(scene):
+            return loaded, [], ''
+        self._editor.submit(build, done)
+
+    def remove_spawned(self, done):
+        """Remove every spawned body still there; ``done(outcome)``."""
+        spawned = set(self._editor.spawned)
+
+        def build(scene):
+            keep = [i for i, body in enumerate(scene.bodies) if body.name not in spawned]
+            new = scene
+            for index in reversed(range(len(scene.bodies))):
+                if index not in keep:
+                    new, _ = without_body(new, index)
+            return new, list(zip(keep, range(len(keep)))), ''
+        self._editor.submit(build, done)
