@@ -15,7 +15,6 @@ from collections import deque
 from dataclasses import replace
 import itertools
 from pathlib import Path
-import threading
 from urllib.parse import unquote, urlparse
 
 import numpy as np
@@ -29,6 +28,7 @@ from rigid_sim.core.scene_edit import (
     with_bodies, without_body)
 from rigid_sim.core.text import shown
 from rigid_sim.entity_services import reference_frame, result
+from rigid_sim.reconfiguration import Preparation
 from rigid_sim.resources import find_scene
 
 from simulation_interfaces import msg as si_msg, srv as si_srv
@@ -50,8 +50,14 @@ class Edit:
 
     def __init__(self, build, done):
         self.build, self.done = build, done
-        self.result = None
-        self.finished = threading.Event()
+        self.preparation = None   # the worker that builds it, once started
+
+    def outcome(self):
+        """What the worker made, or the SpawnRefused any failure of it becomes."""
+        error = self.preparation.error
+        if error is None or isinstance(error, SpawnRefused):
+            return error or self.preparation.result
+        return SpawnRefused('parse', f'{type(error).__name__}: {error}')
 
 
 class SceneEditor:
@@ -88,29 +94,23 @@ class SceneEditor:
         node = self._node
         scene, settings, logger = node.scene, node.settings, node.get_logger()
 
-        def work():
-            try:
-                new_scene, kept, note = edit.build(scene)
-                world = build_world(new_scene, settings.integrator, settings.tolerance)
-                from rigid_sim.node import warm_up   # the node imports this module
-                warm_up(world, settings.integrator, logger)
-                edit.result = (scene, new_scene, world, kept, note)
-            except SpawnRefused as refused:
-                edit.result = refused
-            except Exception as error:  # noqa: B902  any failure refuses the edit, never raises
-                edit.result = SpawnRefused('parse', f'{type(error).__name__}: {error}')
-            edit.finished.set()
+        def work():   # any failure refuses the edit (Edit.outcome), never raises
+            new_scene, kept, note = edit.build(scene)
+            world = build_world(new_scene, settings.integrator, settings.tolerance)
+            from rigid_sim.node import warm_up   # the node imports this module
+            warm_up(world, settings.integrator, logger)
+            return scene, new_scene, world, kept, note
 
-        threading.Thread(target=work, daemon=True, name='rigid_sim scene edit').start()
+        edit.preparation = Preparation(settings, work)
         self._poll.reset()
 
     def _on_poll(self):
         edit = self._running
-        if edit is None or not edit.finished.is_set():
+        if edit is None or not edit.preparation.finished.is_set():
             return
         self._running = None
         self._poll.cancel()
-        edit.done(self._swap(edit.result))
+        edit.done(self._swap(edit.outcome()))
         if self._queue:
             self._start()
 
@@ -136,7 +136,7 @@ class SceneEditor:
     def wait(self, timeout=None):
         """Block until every queued edit is swapped in or refused (tests that tick themselves)."""
         while self._running is not None:
-            if not self._running.finished.wait(timeout):
+            if not self._running.preparation.finished.wait(timeout):
                 return False
             self._on_poll()
         return True
