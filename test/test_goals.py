@@ -258,8 +258,8 @@ def test_goals_out_of_reach_or_malformed_are_refused_with_the_reason():
 
 
 def test_a_scene_body_names_its_goal_unknowns():
-    scene = parse_scene({'bodies': [dict(BOX, goal={'unknowns': 'wrench', 'axes': 'body'}),
-                                     dict(BOX, name='plain')]})
+    wrenched = dict(BOX, goal={'unknowns': 'wrench', 'axes': 'body'})
+    scene = parse_scene({'bodies': [wrenched, dict(BOX, name='plain')]})
     assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body'}
     assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world'}
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: .*wrench_input'):

@@ -197,7 +197,8 @@ def plot(path):
     left.set_xlabel('simulated time (s)')
     left.set_title('solved path of the body frame origin; circles: the goal')
     left.legend()
-    angles = rotation.angle_between(orientations, np.broadcast_to(goal.orientation, (len(times), 4)))
+    wanted = np.broadcast_to(goal.orientation, orientations.shape)
+    angles = rotation.angle_between(orientations, wanted)
     right.semilogy(times, np.maximum(angles, 1e-16))
     right.set_xlabel('simulated time (s)')
     right.set_title('angle to the goal orientation (rad)')
@@ -228,10 +229,11 @@ def main(args):
                       f'{"wrench" if case.unknowns == "wrench" else "twist"} with std. dev. '
                       f'{case.spread[0]:g}, {case.spread[1]:g} per axis'
                       for case in CASES if case.key in args.cases)
-    text = '\n\n'.join(['## Goals: solve time and accuracy', f'Command: `{bench.command_line()}`',
-                         '\n'.join(bench.machine_description()), cases,
-                         table(results, targets)]
-                        + ([f'![a solved springs goal]({link})'] if link else []))
+    parts = ['## Goals: solve time and accuracy', f'Command: `{bench.command_line()}`',
+             '\n'.join(bench.machine_description()), cases, table(results, targets)]
+    if link:
+        parts.append(f'![a solved springs goal]({link})')
+    text = '\n\n'.join(parts)
     print(text)
     if args.out is not None:
         bench.write_section(args.out, SECTION, text)
