@@ -12,7 +12,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -185,6 +185,24 @@ def static_transforms(bodies, frame_prefix, seconds):
 def delete_all_markers():
     """Build a MarkerArray that clears every marker of this publisher in RViz."""
     return MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
+
+
+def path_message(frame_id, times, origins, orientations):
+    """Return a nav_msgs/Path of poses at ``times`` (M,) s in ``frame_id``.
+
+    ``origins`` (M, 3) m and ``orientations`` (M, 4) (x, y, z, w); stamped with the first
+    time.
+    """
+    path = Path()
+    path.header.frame_id = frame_id
+    to_time(float(times[0]), path.header.stamp)
+    for time, pose in zip(times, np.hstack((origins, orientations)).tolist()):
+        stamped = PoseStamped()
+        stamped.header.frame_id = frame_id
+        to_time(float(time), stamped.header.stamp)
+        _set_pose(stamped.pose, pose)
+        path.poses.append(stamped)
+    return path
 
 
 def _set_pose(pose, values):

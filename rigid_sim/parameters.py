@@ -64,6 +64,7 @@ class Settings:
     step_ticks: int        # ticks one ~/step call advances
     frame_prefix: str      # prefixed to every body and point frame
     per_body_topics_limit: int  # up to this many bodies, every per-body topic exists at start
+    goal_horizon: float    # s of simulated time to a ~/<body>/goal stamped zero or in the past
 
     @property
     def publish_every(self):
@@ -129,6 +130,8 @@ SPECS = {
                                        'start; in a larger one each is made once a '
                                        'subscriber (wrench: a publisher) appears on it; read '
                                        'when a scene is loaded', 0, 1_000_000),
+    'goal_horizon': Spec(float, 'seconds of simulated time from now to a ~/<body>/goal whose '
+                                'stamp is zero or not in the future', 1e-6, 1.0e4),
 }
 
 
@@ -218,7 +221,7 @@ def declare(node):
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
                 'step_ticks': 1, 'frame_prefix': '',
-                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT}
+                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, 'goal_horizon': 2.0}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)

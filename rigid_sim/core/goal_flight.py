@@ -195,6 +195,21 @@ class Rollout:
         return final, path
 
 
+def snapshot(world, y=None, held=None):
+    """Return a World that steps as ``world`` would from here, without touching it.
+
+    Its own copy of the state (``y``, default the world's), time, step guard's count,
+    integrator and held wrenches (``held``, default the world's); the bodies and the
+    effects' parameters, which stepping never changes, are shared.
+    """
+    copied = World(world.bodies, world.y if y is None else y, world.effects,
+                   world.integrator.name, world.integrator.tolerance, world.auto_substep,
+                   inputs=copy_held(world.inputs if held is None else held, world.bodies))
+    copied.time = world.time
+    copied.diagnostics.substeps = world.diagnostics.substeps
+    return copied
+
+
 def fly_world(world, y, flight, wrench=None, axes='world', index=None, path_every=0):
     """Fly a copy of ``world`` from state ``y`` over ``flight`` with ``World.step``.
 
@@ -223,13 +238,10 @@ def fly_world(world, y, flight, wrench=None, axes='world', index=None, path_ever
     path : list of (time, (13,) state) of body ``index``
     capped : bool, whether a step needed more than the guard's cap of substeps
     """
-    held = copy_held(flight.held, world.bodies)
+    copied = snapshot(world, y, flight.held)
     if wrench is not None:
-        held.hold(index, GOAL_KEY, axes, wrench[:3], wrench[3:], expires=flight.arrival)
-    copied = World(world.bodies, y, world.effects, world.integrator.name,
-                   world.integrator.tolerance, world.auto_substep, inputs=held)
-    copied.time = flight.t0
-    copied.diagnostics.substeps = world.diagnostics.substeps
+        copied.inputs.hold(index, GOAL_KEY, axes, wrench[:3], wrench[3:],
+                           expires=flight.arrival)
     plan, path, capped = [], [(copied.time, y[index].copy())] if path_every else [], False
     for step in range(flight.steps):
         if not copied.step(flight.dt):

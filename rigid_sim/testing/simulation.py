@@ -13,6 +13,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import ReliabilityPolicy
 
+from rigid_sim.core.goals import Goal
 from rigid_sim.node import RigidSimNode
 
 __all__ = ['BodyState', 'Simulation', 'run_ready_callbacks']
@@ -98,6 +99,18 @@ class Simulation:
         velocity, angular_velocity = snapshot.body_frame_twist()
         return BodyState(origin[index].copy(), orientation[index].copy(),
                          velocity[index].copy(), angular_velocity[index].copy(), self.time)
+
+    def solve(self, body, pose, at, unknowns=None):
+        """Put ``body`` at ``pose`` (position (3,), orientation (4,)) at simulated time ``at``.
+
+        Solves for the body's scene ``goal`` unknowns (or ``unknowns``) from now and applies
+        the solution, as a ``~/<body>/goal`` does at a tick; returns the
+        :class:`rigid_sim.core.goals.GoalSolution`, or raises GoalRefused saying why.
+        """
+        index = self.node.world.bodies.index(body)
+        wanted = self.node.scene.bodies[index].goal
+        goal = Goal(index, *pose, at, unknowns or wanted['unknowns'], wanted['axes'])
+        return self.node.goals.solve_now(goal, self.node.settings)
 
     def step(self, ticks=1):
         """Advance ``ticks`` ticks, settling all messages and callbacks around each one.
