@@ -9,6 +9,7 @@ import py_compile
 from pathlib import Path
 
 import yaml
+from rclpy.parameter import Parameter
 
 from rigid_sim.node import RigidSimNode
 from rigid_sim.parameters import SPECS
@@ -41,11 +42,19 @@ def test_rviz_view_has_world_fixed_frame_and_the_three_displays():
 
 
 def test_every_topic_the_rviz_view_names_is_published_by_the_node(ros_context):
-    """Topics are read from every display of the file; the node runs the default scene."""
-    topics = {display['Topic']['Value'] for display in displays()['Displays']
-              if 'Topic' in display}
-    assert len(topics) == 2
-    node = RigidSimNode(context=ros_context)
+    """Topics are read from every display and tool of the file; wrenches.yaml runs.
+
+    A body's goal path is published from its first goal on, and its goal is subscribed to
+    once a publisher (RViz's goal tool) appears: both are the cart's.
+    """
+    view = displays()
+    topics = {item['Topic']['Value'] for item in view['Displays'] + view['Tools']
+              if 'Topic' in item}
+    assert len(topics) == 4
+    node = RigidSimNode(context=ros_context,
+                        parameter_overrides=[Parameter('scene', value='wrenches.yaml')])
     published = {publisher.topic_name for publisher in node.publishers}
+    goal_topics = node.goals.topics()
     node.destroy_node()
-    assert topics <= published
+    assert topics - {'/rigid_sim/cart/goal_path', '/rigid_sim/cart/goal'} <= published
+    assert '/rigid_sim/cart/goal' in goal_topics

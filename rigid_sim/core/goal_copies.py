@@ -160,6 +160,7 @@ class Copies:
 
 def spoiled(y):
     """Set to NaN the rows of ``y`` (K, 13) that met a non-finite value or lost their unit q."""
-    bad = ~np.isfinite(y).all(axis=1)
-    bad |= np.abs(np.einsum('ij,ij->i', y[:, 3:7], y[:, 3:7]) - 1.0) > UNIT_QUATERNION_SLACK
+    with np.errstate(all='ignore'):   # the rows it looks for may hold inf and NaN
+        bad = ~np.isfinite(y).all(axis=1)
+        bad |= np.abs(np.einsum('ij,ij->i', y[:, 3:7], y[:, 3:7]) - 1.0) > UNIT_QUATERNION_SLACK
     y[bad] = np.nan

@@ -185,8 +185,7 @@ class Rollout:
                 chunk = steps - done
                 if every:
                     chunk = min(chunk, every - (first + done) % every)
-                with np.errstate(all='ignore'):
-                    self.copies.advance(y, t0 + (first + done) * dt, chunk, dt, substeps)
+                self.copies.advance(y, t0 + (first + done) * dt, chunk, dt, substeps)
                 done += chunk
                 if every:
                     path.append((t0 + (first + done) * dt, y[self.targets].copy()))

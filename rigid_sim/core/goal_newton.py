@@ -15,7 +15,7 @@ import numpy as np
 
 from rigid_sim.core.goal_flight import GoalRefused
 
-MAX_ITERATIONS = 60
+MAX_ITERATIONS = 40
 RATIO = 1e-4            # of the predicted decrease a step must achieve to be taken
 FIRST_DAMPING = 1e-3    # of the normal matrix's diagonal, after a refused Newton step
 SMALLEST_DAMPING = 1e-9   # below which a taken step makes the next one Newton's again
@@ -87,11 +87,8 @@ class Newton:
         size = self.residual @ self.residual
         renewed = self.problem.fresh
         while True:
-            normal = self.jacobian.T @ self.jacobian
-            gradient = self.jacobian.T @ self.residual
-            damped = normal + self.damping * np.diag(np.diag(normal))
             try:
-                change = np.linalg.solve(damped, -gradient)
+                change = self._change()
             except np.linalg.LinAlgError:
                 raise NoConvergence(f'the unknowns cannot move the body towards the goal '
                                     f'(singular Jacobian, {self.describe()})') from None
@@ -125,6 +122,14 @@ class Newton:
                 residual, jacobian = self.differences(trial)
         self.values, self.residual, self.jacobian = trial, residual, jacobian
         self.iterations += 1
+
+    def _change(self):
+        """Newton's step, or Levenberg-Marquardt's with the damping (LinAlgError: singular)."""
+        if not self.damping:
+            return np.linalg.solve(self.jacobian, -self.residual)
+        normal = self.jacobian.T @ self.jacobian
+        damped = normal + self.damping * np.diag(np.diag(normal))
+        return np.linalg.solve(damped, -self.jacobian.T @ self.residual)
 
     def chord(self, residual):
         """Step once against ``residual`` (m,), the world's own flight's, with this Jacobian."""

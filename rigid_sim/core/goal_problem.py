@@ -101,7 +101,7 @@ class GoalProblem:
         one-copy flights instead of many Jacobians (a coarse-to-fine solve).
         """
         rate = max([0.0] + [effect.fastest_rate() for effect in self.world.effects])
-        spin = np.linalg.norm(body_frame_state(self.world.bodies, self.y, self.index)[3])
+        spin = np.linalg.norm(self._twist[1])
         steps = math.ceil(self.horizon * (rate + spin + np.pi / self.horizon) / COARSE_STEP)
         fine = sum(n * s for n, s in self.fine.plan)
         if COARSE_GAIN * steps > fine:
@@ -122,6 +122,7 @@ class GoalProblem:
         """Start momenta = A u + b; the scale and difference steps of the unknowns."""
         bodies, index = self.world.bodies, self.index
         _, q, velocity, spin = body_frame_state(bodies, self.y, index)
+        self._twist = velocity, spin
         turn = rotation.to_matrix(q[None])[0]
         mass = bodies.mass[index]
         lever = _skew(turn @ bodies.com_in_body[index])
@@ -211,8 +212,8 @@ class GoalProblem:
         position, orientation = self.target
         end = final[0, :3] - turn @ self.world.bodies.com_in_body[self.index]
         gap = position - end
-        turn_gap = rotation_vector(rotation.multiply(orientation[None], rotation.conjugate(
-            final[:, 3:7])))[0]
+        turn_gap = rotation_vector((left_product(orientation)
+                                    @ rotation.conjugate(final[:, 3:7])[0])[None])[0]
         if self.wrench:
             force = 2.0 * self.mass * gap / self.horizon ** 2
             torque = 2.0 * self.inertia @ turn_gap / self.horizon ** 2
@@ -231,7 +232,7 @@ class GoalProblem:
 
     def twist(self, values):
         """Return the body frame's (linear, angular) velocity the twist ``values`` set."""
-        _, _, velocity, spin = body_frame_state(self.world.bodies, self.y, self.index)
+        velocity, spin = self._twist
         if self.goal.unknowns == 'linear':
             return values, spin
         if self.goal.unknowns == 'angular':

@@ -31,6 +31,11 @@ __all__ = ['ACCEPTED', 'UNKNOWNS', 'WRENCH_AXES', 'Goal', 'GoalRefused', 'GoalSo
            'GoalSolver']
 WRENCH_AXES = ('world', 'body')
 ACCEPTED = 1e-9   # m and rad: a solution further from the goal is refused
+# Starts drawn around the first iterate after the first two fail: how many, how far (m or
+# rad of displacement at the goal's time, per unknown) and from which seed.
+RESTARTS = 8
+RESTART_SPREAD = 0.6
+RESTART_SEED = 20000
 
 
 @dataclass(frozen=True)
@@ -156,13 +161,18 @@ class GoalSolver:
 
     @staticmethod
     def _converged(problem, start, jacobian):
-        """Newton from ``start``, else from the corrected current motion, else from it as is.
+        """Newton from ``start``, else the corrected current motion, else other starts.
 
-        A local minimum of the residual holds the iterations of one start; the next start
-        may lie in another basin. The last failure is the refusal's reason.
+        A local minimum of the residual holds the iterations of one start; the next may lie
+        in another basin: the current motion as it is, then RESTARTS draws around the
+        corrected one (seeded, so a goal solved twice is solved alike). The last failure is
+        the refusal's reason.
         """
+        first = problem.first_iterate()
         starts = [] if start is None else [(start, jacobian)]
-        starts += [(problem.first_iterate(), None), (problem.current, None)]
+        starts += [(first, None), (problem.current, None)]
+        draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
+        starts += [(first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
         for number, (values, known) in enumerate(starts):
             newton = Newton(problem, values, known)
             try:
