@@ -119,7 +119,7 @@ class GoalInput:
         return self._solver
 
     def goal(self, index, message, settings):
-        """The Goal a PoseStamped for body ``index`` asks for; ValueError saying why not."""
+        """Return the Goal a PoseStamped for body ``index`` asks for; ValueError if none."""
         if message.header.frame_id != settings.world_frame:
             raise ValueError(f'unknown frame_id {shown(message.header.frame_id)}: a goal is '
                              f'given in the world frame; valid: [{settings.world_frame!r}]')

@@ -27,7 +27,7 @@ BOX = {'name': 'box', 'shape': {'type': 'box', 'size': [0.2, 0.3, 0.4]}, 'mass':
 
 
 def scene_world(effects=None, bodies=(BOX,), limits=None, integrator='exact_split'):
-    """A World of a scene given as data."""
+    """Return a World of a scene given as data."""
     scene = {'effects': effects or {}, 'bodies': list(bodies), 'limits': limits or {}}
     return build_world(parse_scene(yaml.safe_load(yaml.safe_dump(scene))), integrator)
 
@@ -49,7 +49,7 @@ def flown(world, time_step, until):
 
 
 def pose_of(world, index=0):
-    """The body frame's origin (3,) and orientation (4,) now."""
+    """Return the body frame's origin (3,) and orientation (4,) now."""
     origin, orientation, _, _ = body_frame_state(world.bodies, world.y, index)
     return origin, orientation
 
@@ -153,7 +153,7 @@ def test_newton_converges_quadratically_on_a_tumbling_box():
 
 
 def reachable_goal(effects, change, time_step, unknowns='twist', bodies=(BOX,)):
-    """A goal reached by the first body after a change of its twist (or a held wrench)."""
+    """Return a goal the first body reaches after a change of twist (or a held wrench)."""
     world = scene_world(effects, bodies)
     if unknowns == 'wrench':
         world.inputs.hold(0, 'push', 'world', change[:3], change[3:], expires=T)
@@ -233,7 +233,7 @@ def test_the_same_goal_twice_gives_the_same_bits_and_the_world_is_left_as_it_was
 
 
 def refusal(world, goal, time_step=None):
-    """The reason ``goal`` is refused with; the world's state, time and holdings unchanged."""
+    """Return why ``goal`` is refused; the world's state, time and holdings unchanged."""
     state, time, held = world.y.copy(), world.time, dict(world.inputs.held)
     with pytest.raises(GoalRefused) as refused:
         GoalSolver(world, time_step).solve(goal)

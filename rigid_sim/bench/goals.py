@@ -67,13 +67,13 @@ QUICK = 2   # targets of --quick
 
 
 def world_of(case):
-    """A fresh World of the case's one-body scene, with exact_split."""
+    """Return a fresh World of the case's one-body scene, with exact_split."""
     scene = {'effects': case.effects, 'bodies': [BOX]}
     return build_world(parse_scene(yaml.safe_load(yaml.safe_dump(scene))), 'exact_split')
 
 
 def fly(case, change):
-    """The body's final state (13,) after HORIZON with ``change`` applied, by World.step.
+    """Return the body's final state (13,) after HORIZON with ``change``, by World.step.
 
     ``change``: (6,) twist (origin velocity, angular velocity) or wrench (force, torque).
     """
@@ -182,7 +182,7 @@ def table(results, targets):
 
 
 def plot(path):
-    """A solved springs goal: the body frame's path and its angle to the goal against time."""
+    """Plot a solved springs goal: the body frame's path and its angle to the goal."""
     import matplotlib
     matplotlib.use('Agg')
     from matplotlib import pyplot

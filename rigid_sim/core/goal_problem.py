@@ -280,13 +280,9 @@ class GoalProblem:
         return final[0], path
 
     def _check_limits(self, values):
-        if not self.wrench:
-            return
-        inputs = self.world.inputs
-        force, torque = np.linalg.norm(values[:3]), np.linalg.norm(values[3:])
-        if force > inputs.max_force:
-            raise GoalRefused(f'the goal needs |force| {force:.6g} N, above the scene limit '
-                              f'max_force {inputs.max_force!r} N')
-        if torque > inputs.max_torque:
-            raise GoalRefused(f'the goal needs |torque| {torque:.6g} N m, above the scene '
-                              f'limit max_torque {inputs.max_torque!r} N m')
+        """Refuse a wrench the scene's limits refuse (as a held wrench would be)."""
+        if self.wrench:
+            try:
+                self.world.inputs.check(values[:3], values[3:])
+            except ValueError as error:
+                raise GoalRefused(f'the goal needs {error}') from None
