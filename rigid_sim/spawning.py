@@ -53,7 +53,7 @@ class Edit:
         self.preparation = None   # the worker that builds it, once started
 
     def outcome(self):
-        """What the worker made, or the SpawnRefused any failure of it becomes."""
+        """Return what the worker made, or the SpawnRefused any failure of it becomes."""
         error = self.preparation.error
         if error is None or isinstance(error, SpawnRefused):
             return error or self.preparation.result
