@@ -33,7 +33,8 @@ ARGUMENTS = {
 PARAMETERS = ('scene', 'integrator', 'rate', 'start_paused')   # passed as node parameters
 NUMBERS = ('rate',)            # passed as doubles: the node refuses a text for a number
 BOOLEANS = ('start_paused',)   # passed as bools, from true or false
-VIEWED = ('markers', 'poses')  # the topics rviz/rigid_sim.rviz names under /rigid_sim/
+# The topics rviz/rigid_sim.rviz names under /rigid_sim/ (the goal tool's: the cart's).
+VIEWED = ('markers', 'poses', 'cart/goal_path', 'cart/goal')
 
 
 def typed(name, value):

@@ -12,7 +12,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, MagneticField
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -181,6 +181,24 @@ def fill_pose(pose, origin, orientation):
 def fill_twist(twist, linear, angular):
     """Set a geometry_msgs/Twist from (3,) ``linear`` and (3,) ``angular`` velocities."""
     _set_twist(twist, [float(v) for v in (*linear, *angular)])
+
+
+def path_message(frame_id, times, origins, orientations):
+    """Return a nav_msgs/Path of poses at ``times`` (M,) s in ``frame_id``.
+
+    ``origins`` (M, 3) m and ``orientations`` (M, 4) (x, y, z, w); stamped with the first
+    time.
+    """
+    path = Path()
+    path.header.frame_id = frame_id
+    to_time(float(times[0]), path.header.stamp)
+    for time, pose in zip(times, np.hstack((origins, orientations)).tolist()):
+        stamped = PoseStamped()
+        stamped.header.frame_id = frame_id
+        to_time(float(time), stamped.header.stamp)
+        _set_pose(stamped.pose, pose)
+        path.poses.append(stamped)
+    return path
 
 
 def _set_pose(pose, values):

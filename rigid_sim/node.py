@@ -21,6 +21,7 @@ from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.core.warm_up import warm_up_reporting
 from rigid_sim.diagnostics_output import DiagnosticsOutput
+from rigid_sim.goal_input import GoalInput
 from rigid_sim.imu_output import ImuOutputs
 from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, StateOutputs
@@ -121,6 +122,7 @@ class RigidSimNode(Node):
                                     self.settings.per_body_topics_limit)
         self.imu_outputs = ImuOutputs(self, self.scene, self.world, self.settings.frame_prefix)
         self.inputs = BodyInputs(self, self.scene, self.settings.per_body_topics_limit)
+        self.goals = GoalInput(self, self.scene, self.world)
         self.loop = TickLoop(self, self._tick, self.settings.rate)
         self.control = SimControl(self, self.settings.start_paused, self.loop,
                                   reset=self.reset, step_ticks=lambda: self.settings.step_ticks,
@@ -185,6 +187,7 @@ class RigidSimNode(Node):
     def _tick(self, advance):
         started = time.perf_counter()
         self.inputs.apply(self.world, self.scene, self.settings)
+        self.goals.apply(self.world, self.scene, self.settings)
         if advance:
             self._advance()
         self.health.stats.add(time.perf_counter() - started)

@@ -77,6 +77,7 @@ class Settings:
     max_samples: int       # inertia samples of all bodies together
     max_mesh_bytes: int    # bytes of all distinct mesh files together
     max_mesh_faces: int    # faces of one mesh
+    goal_horizon: float    # s of simulated time to a ~/<body>/goal stamped zero or in the past
 
     @property
     def resource_limits(self):
@@ -155,6 +156,8 @@ SPECS = {
            ('max_samples', 'inertia samples all bodies of a scene may draw together'),
            ('max_mesh_bytes', 'bytes of all distinct mesh files of a scene together'),
            ('max_mesh_faces', 'faces of one mesh at most'))},
+    'goal_horizon': Spec(float, 'seconds of simulated time from now to a ~/<body>/goal whose '
+                                'stamp is zero or not in the future', 1e-6, 1.0e4),
 }
 
 
@@ -244,7 +247,8 @@ def declare(node):
                 'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
                 'step_ticks': 1, 'frame_prefix': '',
-                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS}
+                'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS,
+                'goal_horizon': 2.0}
     for name in SPECS:
         if name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)

@@ -102,7 +102,9 @@ def test_launch_arguments_reach_the_node_namespace_parameters_file_and_start_pau
         assert node.get_fully_qualified_name() == '/sim1/rigid_sim'
         assert (node.paused, node.settings.step_ticks, node.settings.rate) == (True, 7, 200.0)
         published = {publisher.topic_name for publisher in node.publishers}
-        assert {new for _, new in viewer.kwargs['remappings']} <= published
+        remapped = {new for _, new in viewer.kwargs['remappings']}
+        cart = {'/sim1/rigid_sim/cart/goal_path', '/sim1/rigid_sim/cart/goal'}  # wrenches.yaml
+        assert cart <= remapped and remapped - cart <= published
     finally:
         node.destroy_node()
 
@@ -131,12 +133,17 @@ def test_rviz_view_has_world_fixed_frame_and_the_three_displays():
 
 
 def test_every_topic_the_rviz_view_names_is_published_by_the_node(rigid_sim, launch_file):
-    """Topics are read from every display of the file; the node runs the default scene.
+    """Topics are read from every display and tool of the file; wrenches.yaml runs.
 
-    They are the ones the launch file remaps into a namespace.
+    They are the ones the launch file remaps into a namespace. A body's goal path is
+    published from its first goal on, and its goal is subscribed to once a publisher (RViz's
+    goal tool) appears: both are the cart's.
     """
-    topics = {display['Topic']['Value'] for display in displays()['Displays']
-              if 'Topic' in display}
+    view = displays()
+    topics = {item['Topic']['Value'] for item in view['Displays'] + view['Tools']
+              if 'Topic' in item}
     assert topics == {f'/rigid_sim/{topic}' for topic in launch_file.VIEWED}
-    published = {publisher.topic_name for publisher in rigid_sim().node.publishers}
-    assert topics <= published
+    node = rigid_sim(scene='wrenches.yaml').node
+    published = {publisher.topic_name for publisher in node.publishers}
+    assert topics - {'/rigid_sim/cart/goal_path', '/rigid_sim/cart/goal'} <= published
+    assert '/rigid_sim/cart/goal' in node.goals.topics()

@@ -4,9 +4,9 @@
 
 Subcommands: ``accuracy`` (:mod:`.accuracy`), ``inertia`` (:mod:`.inertia_cost`),
 ``stability`` (:mod:`.stability`), ``throughput`` (:mod:`.throughput`), ``node``
-(:mod:`.node_rate`) and ``imu`` (:mod:`.imu_cost`). CPU time is ``time.process_time``
-(this process's user + system time), so other load on the machine does not count against a
-method.
+(:mod:`.node_rate`), ``imu`` (:mod:`.imu_cost`) and ``goals`` (:mod:`.goals`). CPU time
+is ``time.process_time`` (this process's user + system time), so other load on the machine
+does not count against a method.
 """
 import datetime
 import os

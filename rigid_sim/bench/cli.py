@@ -4,12 +4,13 @@
 import argparse
 import sys
 
-from rigid_sim.bench import (MissingPackage, accuracy, flood, imu_cost, inertia_cost,
+from rigid_sim.bench import (MissingPackage, accuracy, flood, goals, imu_cost, inertia_cost,
                              node_rate, stability, startup, throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
     ('flood', flood, 'a flood of wrench messages: real-time factor with and without'),
+    ('goals', goals, 'goals solved for the twist or wrench that reaches them, against scipy'),
     ('imu', imu_cost, 'the cost of an IMU per published reading, and of none'),
     ('inertia', inertia_cost, 'inertia-tensor estimates: error against time'),
     ('node', node_rate, 'the node at scale: real-time factor and tick time against N'),

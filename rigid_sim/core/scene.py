@@ -8,6 +8,7 @@ below as field tables (name -> (checker, default)). Every mistake is refused at 
 what it says or nothing at all. Only the effects a scene lists are built: an unlisted effect
 costs nothing while stepping.
 """
+import dataclasses
 import os
 from dataclasses import dataclass, field
 
@@ -19,6 +20,7 @@ from rigid_sim.core.inputs import (
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.effects.springs import Springs, SpringSpec
+from rigid_sim.core.goals import UNKNOWNS, WRENCH_AXES
 from rigid_sim.core.imu_spec import parse_imus
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
@@ -32,6 +34,7 @@ from rigid_sim.core.scene_limits import Budget, operator_limits, raise_note, WOR
 from rigid_sim.core.text import clipped, shown
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
+GOAL_DEFAULT = {'unknowns': 'twist', 'axes': 'world'}
 # Spring ends closer than this fraction of the rest length count as one point.
 COINCIDENT = 1e-9
 
@@ -58,6 +61,8 @@ class BodySpec:
     points: dict                      # name -> (3,) m, body-frame coordinates
     wrench_input: bool                # False: the body takes no applied wrenches
     imus: tuple = ()                  # of rigid_sim.core.imu_spec.ImuSpec, in file order
+    # What a goal for this body solves for: unknowns in goals.UNKNOWNS, axes of a wrench.
+    goal: dict = dataclasses.field(default_factory=lambda: dict(GOAL_DEFAULT))
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,9 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
                         'orientation': (quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
         'twist': (table({'linear': (vector, ZERO), 'angular': (vector, ZERO)}), {}),
         'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True),
-        'imu': (raw, ABSENT)}
+        'imu': (raw, ABSENT),
+        'goal': (table({'unknowns': (choice(*UNKNOWNS), GOAL_DEFAULT['unknowns']),
+                        'axes': (choice(*WRENCH_AXES), GOAL_DEFAULT['axes'])}), {})}
 SPRING = {'body': (token, REQUIRED), 'stiffness': (non_negative, REQUIRED),
           'point': (vector, ZERO), 'anchor': (vector, ABSENT), 'other': (token, ABSENT),
           'other_point': (vector, ABSENT), 'damping': (non_negative, 0.0),
@@ -180,6 +187,8 @@ def parse_body(value, key, budget, has_field):
         raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
     shape = _shape(body['shape'], f'{key}.shape', budget.base_dir)
     inertia = _inertia(body['inertia'], f'{key}.inertia')
+    if body['goal']['unknowns'] == 'wrench' and not body['wrench_input']:
+        raise Mistake(f'{key}.goal.unknowns', 'a wrench needs wrench_input: true')
     mesh = budget.mesh(shape, f'{key}.shape') if shape['type'] == 'mesh' else None
     if inertia['method'] == 'sampling':
         budget.draw_samples(inertia['samples'], f'{key}.inertia.samples')
@@ -193,7 +202,7 @@ def parse_body(value, key, budget, has_field):
         name=body['name'], shape=shape, mass_properties=properties,
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
         linear_velocity=body['twist']['linear'], angular_velocity=body['twist']['angular'],
-        points=body['points'], wrench_input=body['wrench_input'],
+        points=body['points'], wrench_input=body['wrench_input'], goal=body['goal'],
         imus=parse_imus(body['imu'], f'{key}.imu', body['points'], has_field)
         if 'imu' in body else ())
 

@@ -11,6 +11,7 @@ from sensor_msgs.msg import Imu, MagneticField
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_sim.core.body_state import with_pose, with_twist
+from rigid_sim.core.goals import Goal
 from rigid_sim.testing.delivery import Late, deliver, run_ready_callbacks, wait_until
 from rigid_sim.testing.readings import BodyProperties, BodyState, ImuReading
 from rigid_sim.testing.stepped_node import SteppedNode
@@ -154,6 +155,18 @@ class Simulation:
         if self._latest[topic] is None:
             raise LookupError(f'no reading on {topic} yet: step first')
         return ImuReading.from_messages(self._latest[topic], self._latest.get(f'{topic}/mag'))
+
+    def solve(self, body, pose, at, unknowns=None):
+        """Put ``body`` at ``pose`` (position (3,), orientation (4,)) at simulated time ``at``.
+
+        Solves for the body's scene ``goal`` unknowns (or ``unknowns``) from now and applies
+        the solution, as a ``~/<body>/goal`` does at a tick; returns the
+        :class:`rigid_sim.core.goals.GoalSolution`, or raises GoalRefused saying why.
+        """
+        index = self.node.world.bodies.index(body)
+        wanted = self.node.scene.bodies[index].goal
+        goal = Goal(index, *pose, at, unknowns or wanted['unknowns'], wanted['axes'])
+        return self.node.goals.solve_now(goal, self.node.settings)
 
     def step(self, ticks=1, timeout=STEP_TIMEOUT):
         """Advance ``ticks`` ticks, settling all messages and callbacks around each one.

@@ -1,0 +1,227 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""``~/<body>/goal``: where a body must be at a stamped time; the node finds the motion.
+
+A geometry_msgs/PoseStamped in the world frame, stamped with the simulated time at which
+the body frame must be at that pose (zero, or a time not in the future: ``goal_horizon``
+seconds from now), rounded to the tick grid. At the next tick the goal is solved by
+:class:`rigid_sim.core.goals.GoalSolver` for the unknowns the body's scene entry names
+(``goal: {unknowns: ...}``, a twist by default) and the solution applied: a twist as
+``set_twist`` sets one, a wrench held until the goal's time. The predicted motion goes out
+on ``~/<body>/goal_path`` (nav_msgs/Path) and the outcome, or the reason for a refusal, on
+/diagnostics. A refused goal changes nothing.
+
+Where solving may take longer than a tick should (a flight of more than ``INLINE_STEPS``
+steps that is not a free flight under the exact flow, with a wall clock), it runs in a
+worker thread on a snapshot of the world taken at the tick. The world has moved on by the
+time the answer comes, so it is re-anchored at the tick that applies it: solved again from
+the world as it is then, starting from the worker's solution and Jacobian, which takes a
+few one-copy flights where the first solve took many. Without a wall clock (rate 0, or a
+loop stopped for lockstep) every goal is solved in the tick, so a lockstep run stays
+repeatable to the bit.
+"""
+import queue
+import threading
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Path
+from rclpy.clock import Clock, ClockType
+
+from rigid_sim import conversions
+from rigid_sim.core.goal_flight import free_under_exact_flow, snapshot
+from rigid_sim.core.goals import Goal, GoalSolver
+from rigid_sim.core.text import shown
+from rigid_sim.qos_overrides import QUEUE_DEPTH
+
+DEMAND_REFRESH = 0.5   # s of wall time between two looks for new goal publishers
+INLINE_STEPS = 200     # world steps of a flight solved in the tick; longer ones in a thread
+WARNING_PERIOD = 2.0   # s of wall time between two warnings about refused goals
+
+
+class GoalInput:
+    """The goal subscriptions, the solves in flight and their outputs, for one node.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Owns the topics; its ``loop`` (if it has one) tells whether a wall clock runs.
+    scene : rigid_sim.core.scene.Scene
+    world : rigid_sim.core.world.World
+    """
+
+    def __init__(self, node, scene, world):
+        self._node = node
+        self._diagnostics = node.create_publisher(DiagnosticArray, '/diagnostics',
+                                                  QUEUE_DEPTH)
+        self._subscriptions, self._paths = [], {}
+        self._inbox = {}      # body index -> newest goal message since the last tick
+        self._results = queue.SimpleQueue()   # finished worker solves
+        self._jobs = None     # the worker's queue, once a solve needs it
+        self._latest = {}     # body index -> number of its newest solve in a thread
+        self.solved = self.refused = 0
+        self.wire(scene, world)
+        node.create_timer(DEMAND_REFRESH, self.subscribe_on_demand,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def wire(self, scene, world):
+        """Take ``scene`` and its ``world``: forget goals, await its bodies' goal topics."""
+        for subscription in self._subscriptions:
+            self._node.destroy_subscription(subscription)
+        for publisher in self._paths.values():
+            self._node.destroy_publisher(publisher)
+        self._subscriptions, self._paths, self._inbox, self._latest = [], {}, {}, {}
+        self._scene, self._world, self._solver, self._time = scene, world, None, world.time
+        self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/goal'): index
+                         for index, body in enumerate(scene.bodies)}
+
+    def subscribe_on_demand(self):
+        """Subscribe to every goal topic that has a publisher in the graph now."""
+        if not self._awaited:
+            return
+        present = {name for name, _ in self._node.get_topic_names_and_types()}
+        for name in present & self._awaited.keys():
+            index = self._awaited.pop(name)
+            self._subscriptions.append(self._node.create_subscription(
+                PoseStamped, name, lambda message, index=index: self._store(index, message),
+                QUEUE_DEPTH))
+
+    def topics(self):
+        """Fully qualified goal topics, subscribed to or awaited."""
+        return {s.topic_name for s in self._subscriptions} | set(self._awaited)
+
+    def _store(self, index, message):
+        self._inbox[index] = message   # the newest goal of a body replaces an older one
+
+    def apply(self, world, scene, settings):
+        """At a tick: apply finished solves, start the goals received since the last one."""
+        if world is not self._world:
+            self.wire(scene, world)
+        if world.time < self._time:   # a reset: goals of the old run are void
+            self._inbox, self._latest = {}, {}
+        self._time = world.time
+        while not self._results.empty():
+            self._finish(settings, *self._results.get())
+        inbox, self._inbox = self._inbox, {}
+        for index, message in inbox.items():
+            self._start(index, message, settings)
+
+    def solve_now(self, goal, settings):
+        """Solve ``goal`` in this thread and apply it; the GoalSolution (GoalRefused raised)."""
+        solution = self._solver_for(settings).solve(goal, path=True)
+        self._applied(solution, settings, 'tick')
+        return solution
+
+    def _solver_for(self, settings):
+        step = settings.time_step / settings.substeps
+        if self._solver is None or self._solver.time_step != step:
+            self._solver = GoalSolver(self._world, step)
+        return self._solver
+
+    def goal(self, index, message, settings):
+        """Return the Goal a PoseStamped for body ``index`` asks for; ValueError if none."""
+        if message.header.frame_id != settings.world_frame:
+            raise ValueError(f'unknown frame_id {shown(message.header.frame_id)}: a goal is '
+                             f'given in the world frame; valid: [{settings.world_frame!r}]')
+        now, tick = self._world.time, settings.time_step
+        at = conversions.to_seconds(message.header.stamp)
+        if at <= now:   # zero, or not in the future
+            at = now + settings.goal_horizon
+        ticks = round((at - now) / tick)
+        if ticks < 1:
+            raise ValueError(f'the goal time {at!r} s is less than a tick after {now!r} s')
+        position, orientation = conversions.pose_arrays(message.pose)
+        wanted = self._scene.bodies[index].goal
+        return Goal(index, position, orientation, now + ticks * tick, wanted['unknowns'],
+                    wanted['axes'])
+
+    def _start(self, index, message, settings):
+        try:
+            goal = self.goal(index, message, settings)
+            if self._in_tick(goal, settings):
+                self._latest.pop(index, None)   # an older solve in a thread is void
+                self.solve_now(goal, settings)
+                return
+        except ValueError as error:   # GoalRefused is a ValueError
+            self._report_refusal(index, error)
+            return
+        number = self._latest[index] = self._latest.get(index, 0) + 1
+        if self._jobs is None:
+            self._jobs = queue.SimpleQueue()
+            threading.Thread(target=_work, args=(self._jobs, self._results), daemon=True,
+                             name='rigid_sim goals').start()
+        self._jobs.put((number, goal, snapshot(self._world), self._solver_for(settings)
+                        .time_step, self._world))
+
+    def _in_tick(self, goal, settings):
+        world = self._world
+        loop = getattr(self._node, 'loop', None)
+        steps = (goal.at - world.time) * settings.substeps / settings.time_step
+        return (settings.rate == 0.0 or getattr(loop, 'stopped', True) or steps <= INLINE_STEPS
+                or goal.unknowns != 'wrench'
+                and free_under_exact_flow(world, goal.body, world.inputs))
+
+    def _finish(self, settings, number, goal, outcome, world):
+        if world is not self._world or self._latest.get(goal.body) != number:
+            return   # another scene, a reset or a newer goal for the body since
+        del self._latest[goal.body]
+        if isinstance(outcome, Exception):
+            self._report_refusal(goal.body, outcome)
+            return
+        try:   # re-anchored: from the world as it is now, near the worker's solution
+            solution = self._solver_for(settings).solve(
+                goal, path=True, start=outcome.values, jacobian=outcome.jacobian)
+        except ValueError as error:   # GoalRefused is a ValueError
+            self._report_refusal(goal.body, error)
+            return
+        self._applied(solution, settings, 'worker thread, re-anchored at the tick')
+
+    def _applied(self, solution, settings, where):
+        self._solver.apply(solution)
+        self.solved += 1
+        index = solution.goal.body
+        name = self._scene.bodies[index].name
+        if index not in self._paths:
+            self._paths[index] = self._node.create_publisher(Path, f'~/{name}/goal_path',
+                                                             QUEUE_DEPTH)
+        self._paths[index].publish(conversions.path_message(settings.world_frame,
+                                                            *solution.path))
+        values = {'body': name, 'unknowns': solution.goal.unknowns,
+                  'goal time [s]': solution.goal.at, 'arrival [s]': solution.arrival,
+                  'position error [m]': solution.position_error,
+                  'orientation error [rad]': solution.orientation_error,
+                  'iterations': solution.iterations,
+                  'solve time [ms]': 1e3 * solution.seconds,
+                  'Jacobian condition': solution.condition, 'solved in': where}
+        if solution.wrench is None:
+            values.update({'linear velocity [m/s]': solution.linear_velocity,
+                           'angular velocity [rad/s]': solution.angular_velocity})
+        else:
+            values.update({f'force [N] ({solution.goal.axes} axes)': solution.wrench[:3],
+                           f'torque [N m] ({solution.goal.axes} axes)': solution.wrench[3:]})
+        self._publish(name, DiagnosticStatus.OK, f'goal solved: at the goal at '
+                      f'{solution.arrival:.9g} s', values)
+
+    def _report_refusal(self, index, error):
+        self.refused += 1
+        name = self._scene.bodies[index].name
+        self._node.get_logger().warning(f'refused a goal on ~/{name}/goal: {error}',
+                                        throttle_duration_sec=WARNING_PERIOD)
+        self._publish(name, DiagnosticStatus.WARN, f'goal refused: {error}',
+                      {'body': name, 'refused goals': self.refused})
+
+    def _publish(self, name, level, summary, values):
+        self._diagnostics.publish(conversions.diagnostics(
+            f'{self._node.get_name()}: goal {name}', self._world.time, level, summary,
+            {**values, 'goals solved': self.solved, 'goals refused': self.refused}))
+
+
+def _work(jobs, results):
+    """Solve goals from world snapshots, one after another, for ever (a daemon thread)."""
+    while True:
+        number, goal, copied, step, world = jobs.get()
+        try:
+            outcome = GoalSolver(copied, step).solve(goal)
+        except Exception as error:   # noqa: B902 - whatever it is, the tick reports it
+            outcome = error
+        results.put((number, goal, outcome, world))

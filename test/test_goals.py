@@ -1,0 +1,268 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Goals: the twist or wrench now that puts a body at a pose at a later time.
+
+Expected solutions come from closed forms (a free body, a ballistic flight, Euler's
+torque-free symmetric top); where there is none, the test flies the world with the
+solution applied, as the node will, and measures where the body ends up.
+"""
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+
+import physics_cases
+from rigid_sim.core.body_state import body_frame_state, with_twist
+from rigid_sim.core.effects.gravity import Gravity
+from rigid_sim.core.goal_newton import Newton
+from rigid_sim.core.goal_problem import GoalProblem
+from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver
+from rigid_sim.core.scene import SceneError, build_world, parse_scene
+
+T = 2.0   # s from now to every goal
+G = np.array([0.0, 0.0, -9.81])
+BOX = {'name': 'box', 'shape': {'type': 'box', 'size': [0.2, 0.3, 0.4]}, 'mass': 2.0,
+       'pose': {'position': [0.3, 0.0, 0.5]},
+       'twist': {'linear': [0.1, 0.0, 0.0], 'angular': [1.0, 2.0, 3.0]}}
+
+
+def scene_world(effects=None, bodies=(BOX,), limits=None, integrator='exact_split'):
+    """Return a World of a scene given as data."""
+    scene = {'effects': effects or {}, 'bodies': list(bodies), 'limits': limits or {}}
+    return build_world(parse_scene(yaml.safe_load(yaml.safe_dump(scene))), integrator)
+
+
+def sphere_world(velocity, spin, effects=(), integrator='exact_split'):
+    """One 1 kg sphere (I = 0.4 kg m^2 about any axis) at the origin, no wrench input."""
+    bodies = physics_cases.make_bodies(1.0, 0.4 * np.eye(3))
+    effects = [effect(bodies) for effect in effects]
+    return physics_cases.make_world(bodies, np.zeros(3), [0.0, 0.0, 0.0, 1.0], velocity,
+                                    spin, effects, integrator, auto_substep=True)
+
+
+def flown(world, time_step, until):
+    """Step ``world`` by ``time_step`` until simulated time ``until``; the world."""
+    steps = round((until - world.time) / time_step)
+    for _ in range(steps):
+        assert world.step(time_step)
+    return world
+
+
+def pose_of(world, index=0):
+    """Return the body frame's origin (3,) and orientation (4,) now."""
+    origin, orientation, _, _ = body_frame_state(world.bodies, world.y, index)
+    return origin, orientation
+
+
+def distance(world, goal):
+    """Position (m) and orientation (rad) distance of body ``goal.body`` from the goal."""
+    origin, orientation = pose_of(world, goal.body)
+    angle = physics_cases.rotation_error(orientation, goal.orientation)
+    return float(np.linalg.norm(origin - goal.position)), float(angle)
+
+
+def test_a_free_body_moves_by_the_gap_over_the_time():
+    """Free sphere: v = dx / T, and omega = the rotation vector from now to the goal over T."""
+    world = sphere_world([0.3, 0.0, 0.0], [0.0, 0.5, 0.0])
+    turn = Rotation.from_rotvec([0.4, -0.2, 1.1])
+    goal = Goal(0, np.array([1.0, -2.0, 0.5]), turn.as_quat(), T)
+    solution = GoalSolver(world).solve(goal)
+    assert np.allclose(solution.linear_velocity, goal.position / T, rtol=0, atol=1e-12)
+    assert np.allclose(solution.angular_velocity, turn.as_rotvec() / T, rtol=0, atol=1e-10)
+    assert max(solution.position_error, solution.orientation_error) <= ACCEPTED
+
+
+def test_of_the_whole_turns_the_one_nearest_the_current_spin_is_taken():
+    """A sphere spinning 3.5 rad/s about z reaches a 1 rad turn at T = 2 s by 7 - 2 pi."""
+    world = sphere_world(np.zeros(3), [0.0, 0.0, 3.5])
+    goal = Goal(0, np.zeros(3), Rotation.from_rotvec([0.0, 0.0, 1.0]).as_quat(), T)
+    solution = GoalSolver(world).solve(goal)
+    # Solutions: (1 + 2 pi k) / T about z; the current 3.5 rad/s is nearest k = 1.
+    expected = (1.0 + 2.0 * np.pi) / T
+    assert np.allclose(solution.angular_velocity, [0.0, 0.0, expected], atol=1e-10)
+
+
+def test_a_ballistic_flight_under_gravity_starts_at_the_closed_form_velocity():
+    """x(T) = x0 + v0 T + g T^2 / 2 gives v0 = dx / T - g T / 2 (linear unknowns)."""
+    world = sphere_world([0.0, 0.0, 0.0], [0.2, 0.0, 0.0],
+                         effects=[lambda bodies: Gravity(bodies, G)])
+    target = np.array([2.0, 1.0, 0.5])
+    goal = Goal(0, target, [0.0, 0.0, 0.0, 1.0], T, unknowns='linear')
+    solution = GoalSolver(world).solve(goal)
+    assert np.allclose(solution.linear_velocity, target / T - G * T / 2, rtol=0, atol=1e-12)
+    assert np.allclose(solution.angular_velocity, [0.2, 0.0, 0.0], rtol=0, atol=1e-15)
+    assert solution.position_error <= ACCEPTED
+
+
+def symmetric_top(q0, omega, time, moments):
+    """Orientation (4,) of Euler's torque-free symmetric top (I1 = I2) after ``time``.
+
+    R(t) = exp(t L / I1) R0 exp(t lambda e3): precession about L at |L| / I1 and a spin
+    about the figure axis e3 at lambda = L3 (1/I3 - 1/I1), L3 the momentum along it.
+    """
+    i1, _, i3 = moments
+    start = Rotation.from_quat(q0)
+    momentum = start.apply(np.diag(moments) @ start.inv().apply(omega))
+    along = momentum @ start.apply([0.0, 0.0, 1.0])
+    precession = Rotation.from_rotvec(momentum / i1 * time)
+    spin = Rotation.from_rotvec([0.0, 0.0, along * (1.0 / i3 - 1.0 / i1) * time])
+    return (precession * start * spin).as_quat()
+
+
+def test_a_torque_free_symmetric_top_reaches_the_goal_of_its_closed_form():
+    """Angular unknowns: the solution's closed-form precession ends at the goal, 1e-9 rad."""
+    moments = np.array([0.3, 0.3, 0.1])
+    bodies = physics_cases.make_bodies(1.0, np.diag(moments))
+    q0 = physics_cases.TILT.as_quat()
+    world = physics_cases.make_world(bodies, np.zeros(3), q0, np.zeros(3), [0.5, -1.0, 2.0],
+                                     integrator='exact_split', auto_substep=True)
+    wanted = symmetric_top(q0, np.array([0.9, -0.7, 2.4]), T, moments)
+    solution = GoalSolver(world).solve(Goal(0, np.zeros(3), wanted, T, unknowns='angular'))
+    reached = symmetric_top(q0, solution.angular_velocity, T, moments)
+    assert physics_cases.rotation_error(reached, wanted) < 1e-9
+
+
+def test_newton_converges_quadratically_on_a_tumbling_box():
+    """Each residual near the solution is at most a constant times the square of the last.
+
+    Newton's with a Jacobian of forward differences at every iterate, from 0.13 (m and rad)
+    to 1e-13: 0.13, 0.096, 0.015, 3.1e-3, 9.5e-5, 2.5e-9, 2.5e-15 in one run.
+    """
+    world = scene_world()
+    _, _, velocity, spin = body_frame_state(world.bodies, world.y, 0)
+    moved = with_twist(world.bodies, world.y, 0, velocity + [0.2, -0.1, 0.3],
+                       spin + [0.3, 0.2, -0.4])
+    target = scene_world()
+    target.y = moved
+    target.step(T)
+    goal = Goal(0, *pose_of(target), T)
+    problem = GoalProblem(GoalSolver(world), goal, goal.position, goal.orientation)
+    newton = Newton(problem, problem.first_iterate())
+    sizes = []
+    newton.residual, newton.jacobian = newton.differences(newton.values)
+    while np.linalg.norm(newton.residual) > 1e-13:
+        sizes.append(np.linalg.norm(newton.residual))
+        newton._step()
+        assert newton.iterations < 20
+    sizes.append(np.linalg.norm(newton.residual))
+    # Near the solution (the residual below 1e-3 m and rad) the error squares each step,
+    # down to round-off (1e-14 m on a metre).
+    small = [(a, b) for a, b in zip(sizes, sizes[1:]) if a < 1e-3]
+    assert len(small) >= 2
+    assert all(b <= 100.0 * a ** 2 + 1e-14 for a, b in small)
+
+
+def reachable_goal(effects, change, time_step, unknowns='twist', bodies=(BOX,)):
+    """Return a goal the first body reaches after a change of twist (or a held wrench)."""
+    world = scene_world(effects, bodies)
+    if unknowns == 'wrench':
+        world.inputs.hold(0, 'push', 'world', change[:3], change[3:], expires=T)
+    else:
+        _, _, velocity, spin = body_frame_state(world.bodies, world.y, 0)
+        world.y = with_twist(world.bodies, world.y, 0, velocity + change[:3],
+                             spin + change[3:])
+    return Goal(0, *pose_of(flown(world, time_step, T)), T, unknowns)
+
+
+SPRING = {'body': 'box', 'point': [0.02, 0.02, 0.02], 'anchor': [0.0, 0.0, 1.0],
+          'stiffness': 8.0, 'damping': 0.2}
+FLOWN_CASES = {
+    'damping': ({'damping': {'linear': 0.5, 'angular': 0.3}}, 'twist'),
+    'springs': ({'springs': [SPRING]}, 'twist'),
+    'wrench': ({'gravity': {'acceleration': G.tolist()}}, 'wrench'),
+}
+
+
+@pytest.mark.parametrize('case', sorted(FLOWN_CASES))
+def test_the_world_flown_with_the_solution_ends_at_the_goal(case):
+    """Applied as the node applies it, the solution takes the body to the goal, 1e-9."""
+    effects, unknowns = FLOWN_CASES[case]
+    change = np.array([3.0, -2.0, 1.0, 0.02, 0.01, -0.03]) if unknowns == 'wrench' else \
+        np.array([0.3, -0.2, 0.1, 0.2, -0.3, 0.1])
+    goal = reachable_goal(effects, change, 1e-2, unknowns)
+    world = scene_world(effects)
+    solver = GoalSolver(world, 1e-2)
+    solution = solver.solve(goal)
+    solver.apply(solution)
+    assert max(distance(flown(world, 1e-2, solution.arrival), goal)) <= ACCEPTED
+    if unknowns == 'wrench':
+        assert world.step(1e-2) and not world.inputs.held   # let go at the arrival
+
+
+def test_a_goal_across_a_held_wrench_running_out_and_a_spring_to_another_body():
+    """A wrench held for 0.5 s and a spring between two bodies are part of the flight."""
+    other = dict(BOX, name='other', pose={'position': [1.0, 0.0, 0.5]}, twist={})
+    effects = {'springs': [{'body': 'box', 'other': 'other', 'stiffness': 5.0,
+                            'point': [0.05, 0.0, 0.0], 'rest_length': 0.5}]}
+    world = scene_world(effects, (BOX, other))
+    target = scene_world(effects, (BOX, other))
+    for each in (world, target):
+        each.inputs.hold(0, 'push', 'world', [2.0, 0.0, 0.0], [0.0, 0.01, 0.0], expires=0.5)
+    _, _, velocity, spin = body_frame_state(target.bodies, target.y, 0)
+    target.y = with_twist(target.bodies, target.y, 0, velocity + 0.2, spin - 0.1)
+    goal = Goal(0, *pose_of(flown(target, 1e-2, T)), T)
+    solver = GoalSolver(world, 1e-2)
+    solution = solver.solve(goal)
+    solver.apply(solution)
+    assert max(distance(flown(world, 1e-2, T), goal)) <= ACCEPTED
+
+
+def test_a_fast_spin_that_makes_the_guard_split_steps_still_ends_at_the_goal():
+    """At 0.05 s ticks a sprung box spinning ~12 rad/s takes several substeps a step."""
+    effects = {'springs': [SPRING]}
+    fast = dict(BOX, twist={'angular': [5.0, 7.0, 9.0]})
+    goal = reachable_goal(effects, np.full(6, 0.1), 0.05, bodies=(fast,))
+    world = scene_world(effects, (fast,))
+    solver = GoalSolver(world, 0.05)
+    solution = solver.solve(goal)
+    solver.apply(solution)
+    flown(world, 0.05, T)
+    assert world.diagnostics.substeps > 1
+    assert max(distance(world, goal)) <= ACCEPTED
+
+
+def test_the_same_goal_twice_gives_the_same_bits_and_the_world_is_left_as_it_was():
+    world = scene_world({'springs': [SPRING]})
+    before = world.y.copy()
+    goal = reachable_goal({'springs': [SPRING]}, np.full(6, 0.1), 1e-2)
+    first = GoalSolver(world, 1e-2).solve(goal)
+    second = GoalSolver(world, 1e-2).solve(goal)
+    assert np.array_equal(first.linear_velocity, second.linear_velocity)
+    assert np.array_equal(first.angular_velocity, second.angular_velocity)
+    assert np.array_equal(world.y, before) and world.time == 0.0
+
+
+def refusal(world, goal, time_step=None):
+    """Return why ``goal`` is refused; the world's state, time and holdings unchanged."""
+    state, time, held = world.y.copy(), world.time, dict(world.inputs.held)
+    with pytest.raises(GoalRefused) as refused:
+        GoalSolver(world, time_step).solve(goal)
+    assert np.array_equal(world.y, state) and world.time == time
+    assert world.inputs.held == held
+    return str(refused.value)
+
+
+def test_goals_out_of_reach_or_malformed_are_refused_with_the_reason():
+    world = scene_world(limits={'max_force': 1.0, 'max_torque': 1.0})
+    unit = [0.0, 0.0, 0.0, 1.0]
+    far = Goal(0, np.array([50.0, 0.0, 0.5]), unit, T, unknowns='wrench')
+    assert 'max_force' in refusal(world, far, 1e-2)
+    assert 'not after the simulated time' in refusal(world, Goal(0, np.zeros(3), unit, 0.0))
+    assert 'finite' in refusal(world, Goal(0, np.array([np.nan, 0, 0]), unit, T))
+    assert 'unit quaternion' in refusal(world, Goal(0, np.zeros(3), [0, 0, 0, 2.0], T))
+    assert 'less than one step' in refusal(world, Goal(0, np.zeros(3), unit, 1e-3), 1e-2)
+    assert 'unknowns' in refusal(world, Goal(0, np.zeros(3), unit, T, unknowns='push'))
+    fixed = scene_world(bodies=[dict(BOX, wrench_input=False)])
+    assert refusal(fixed, Goal(0, np.zeros(3), unit, T, unknowns='wrench')).endswith(
+        'takes no wrench input')
+
+
+def test_a_scene_body_names_its_goal_unknowns():
+    wrenched = dict(BOX, goal={'unknowns': 'wrench', 'axes': 'body'})
+    scene = parse_scene({'bodies': [wrenched, dict(BOX, name='plain')]})
+    assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body'}
+    assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world'}
+    with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: .*wrench_input'):
+        parse_scene({'bodies': [dict(BOX, wrench_input=False, goal={'unknowns': 'wrench'})]})
+    with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: expected one of'):
+        parse_scene({'bodies': [dict(BOX, goal={'unknowns': 'spin'})]})
