@@ -9,7 +9,7 @@ draws does not depend on who subscribes: a seeded run reads the same whoever wat
 from sensor_msgs.msg import Imu
 
 from rigid_sim import conversions
-from rigid_sim.core.imu import build_imus
+from rigid_sim.core.imu import scene_imus
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 
@@ -40,8 +40,7 @@ class ImuOutputs:
         """Replace the IMUs and publishers by those of ``scene``."""
         for publisher in self._publishers:
             self._node.destroy_publisher(publisher)
-        gravity = scene.effects.get('gravity', {}).get('acceleration')
-        self.imus = build_imus(scene.bodies, world.bodies, gravity)
+        self.imus = scene_imus(scene, world.bodies)
         if self.imus is None:
             self._publishers, self._messages = [], []
             return

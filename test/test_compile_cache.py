@@ -165,7 +165,7 @@ def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     """The node's warm-up logs before and after a compilation, and nothing without one."""
     logger = RecordingLogger()
     monkeypatch.setattr('rigid_sim.core.warm_up.warm_up',
-                        lambda world, integrator: _fresh_kernel(1.5))
+                        lambda world, integrator, imus: _fresh_kernel(1.5))
     world = SimpleNamespace(effects=[], bodies=SimpleNamespace(count=1))
     assert node_warm_up(world, 'rk4', logger) == 1
     assert len(logger.lines) == 2

@@ -21,14 +21,16 @@ from rigid_sim.resources import DEFAULT_SCENE, find_scene
 
 SECTION = 'rigid_sim_bench startup'
 REPEATS = 1
-# The child: load the scene, warm up, step once; prints the warm-up seconds and the kernels
-# it compiled.
+# The child: load the scene, warm up (its IMUs too), step once; prints the warm-up seconds
+# and the kernels it compiled.
 CHILD = '''
+from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.scene import build_world, load_scene
 from rigid_sim.core.warm_up import warm_up_reporting
 from rigid_sim.resources import find_scene
-world = build_world(load_scene(find_scene({scene!r})), {integrator!r})
-seconds, compiled = warm_up_reporting(world)
+scene = load_scene(find_scene({scene!r}))
+world = build_world(scene, {integrator!r})
+seconds, compiled = warm_up_reporting(world, imus=scene_imus(scene, world.bodies))
 assert world.step(0.01)
 print(seconds, compiled)
 '''

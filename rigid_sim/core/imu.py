@@ -106,6 +106,15 @@ def build_imus(scene_bodies, bodies, gravity):
     return Imus(bodies, mounted, np.zeros(3) if gravity is None else np.asarray(gravity))
 
 
+def scene_imus(scene, bodies):
+    """Return the :class:`Imus` of ``scene`` on ``bodies`` (its RigidBodies), or None.
+
+    Their gravity is the scene's (none when it lists no gravity).
+    """
+    gravity = scene.effects.get('gravity', {}).get('acceleration')
+    return build_imus(scene.bodies, bodies, gravity)
+
+
 @dataclass(frozen=True)
 class Readings:
     """What K IMUs read at one time; rows in the order of the ``which`` asked for."""

@@ -218,7 +218,7 @@ def from_body_axes(start, y):
     _to_public(y, True)
 
 
-@helper
+@helper(inline='always')
 def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes):
     """``substeps`` steps of ``h`` of the tableau (a, b, c) on ``y`` in place; failure code."""
     for k in range(substeps):
@@ -229,7 +229,7 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes)
     return 0
 
 
-@helper
+@helper(inline='always')
 def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_axes):
     """:func:`_runge_kutta` for effects that each act on one body: a body at a time.
 

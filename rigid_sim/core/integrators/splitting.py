@@ -75,7 +75,7 @@ def dlm_rotation(moments, momentum, q, h):
     return momentum, q
 
 
-@helper
+@helper(inline='always')
 def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     """One body's free motion for ``h``: its new ``x``, ``q`` and world ``L`` (tuples).
 
@@ -100,7 +100,7 @@ def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     return x, q, big_l
 
 
-@helper
+@helper(inline='always')
 def _drift(y, model, h, drift):
     """Free motion for ``h`` of every body, in place."""
     for i in range(y.shape[0]):
@@ -147,7 +147,7 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
             y[i, 7 + j] = value
 
 
-@helper
+@helper(inline='always')
 def _strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
                         a, b, drift):
     """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
@@ -174,7 +174,7 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
     return 0
 
 
-@helper
+@helper(inline='always')
 def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift):
     """:func:`_strang_composition` for effects that each act on one body.
 
