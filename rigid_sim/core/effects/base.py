@@ -20,8 +20,9 @@ adding its forces and torques into ``force`` and ``torque`` (N, 3) at the packed
 (N, 13) = [x, q, P, L]. ``model`` is the :class:`~rigid_sim.core.state.Model` of the bodies.
 :func:`accumulate` sums them in one function written out for the tuple of parameter types
 a scene lists, so numba builds a kernel specialised to exactly that set: an unlisted effect
-is not in the compiled code at all. When every listed effect acts per body (:func:`acts_per_body`), an integrator
-may instead take each body through a whole step in registers with :func:`body_wrench`.
+is not in the compiled code at all. When every listed effect acts per body
+(:func:`acts_per_body`), an integrator may instead take each body through a whole step in
+registers with :func:`body_wrench`.
 """
 import itertools
 

@@ -84,8 +84,8 @@ class Dopri5(Integrator):
 
         end = time + dt
         solver = self._stepper(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
-                                atol=self.tolerance * self._scale(z, dt).ravel(),
-                                first_step=min(self._step_size or dt, end - time))
+                               atol=self.tolerance * self._scale(z, dt).ravel(),
+                               first_step=min(self._step_size or dt, end - time))
         self.last_substeps = 0
         while solver.status == 'running':
             message = solver.step()
