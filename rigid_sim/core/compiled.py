@@ -10,7 +10,7 @@ both, about a quarter of the time a first start spends compiling (docs/performan
 "Compile cost"); callers within compiled code never use them. A helper called from Python
 raises TypeError, as there is no wrapper to call.
 """
-from numba import njit
+from numba import njit, types
 from numba.core.registry import CPUDispatcher
 
 
@@ -20,6 +20,15 @@ class CompiledOnly(CPUDispatcher):
     def __call__(self, *args, **kwargs):
         raise TypeError(f'{self.py_func.__module__}.{self.py_func.__qualname__} is compiled '
                         'for compiled callers only (a helper): call a kernel from Python')
+
+    def get_call_template(self, args, kws):
+        """Type a call from compiled code by the arguments' types, never by constant values.
+
+        numba would otherwise compile a helper once per constant it is called with
+        (``kin.vector(y, i, 0)`` and ``kin.vector(y, i, 7)``: two specialisations).
+        """
+        return super().get_call_template(tuple(types.unliteral(a) for a in args),
+                                         {name: types.unliteral(a) for name, a in kws.items()})
 
 
 def kernel(function=None, **options):
