@@ -176,6 +176,25 @@ def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     assert len(logger.lines) == 2
 
 
+def test_the_node_warms_up_the_readings_of_its_scene_imus(ros_context, monkeypatch):
+    """A node on the IMU scene hands its IMU to the warm-up, which compiles its readings.
+
+    Without them the first tick would compile the readings, unannounced.
+    """
+    from rclpy.parameter import Parameter
+    from rigid_sim.node import RigidSimNode
+    handed = []
+    monkeypatch.setattr('rigid_sim.core.warm_up.warm_up',
+                        lambda world, integrator, imus: handed.append(imus) or 0.0)
+    node = RigidSimNode(context=ros_context,
+                        parameter_overrides=[Parameter('scene', value='imu.yaml')])
+    try:
+        assert len(handed) == 1 and handed[0] is not None
+        assert handed[0].bodies == node.imu_outputs.imus.bodies == [0]
+    finally:
+        node.destroy_node()
+
+
 def test_a_second_node_for_the_same_scene_compiles_nothing(ros_context):
     """A second node for the same scene finds every kernel compiled.
 
