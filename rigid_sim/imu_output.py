@@ -11,7 +11,7 @@ not depend on who subscribes: a seeded run reads the same whoever watches.
 from sensor_msgs.msg import Imu, MagneticField
 
 from rigid_sim import conversions
-from rigid_sim.core.imu import build_imus
+from rigid_sim.core.imu import scene_imus
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 
@@ -42,8 +42,7 @@ class ImuOutputs:
         """Replace the IMUs and publishers by those of ``scene``."""
         for publisher in (p for pair in self._publishers for p in pair if p is not None):
             self._node.destroy_publisher(publisher)
-        gravity = scene.effects.get('gravity', {}).get('acceleration')
-        self.imus = build_imus(scene.bodies, world.bodies, gravity, scene.magnetic_field)
+        self.imus = scene_imus(scene, world.bodies)
         if self.imus is None:
             self._publishers, self._messages = [], []
             return

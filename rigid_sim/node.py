@@ -17,6 +17,7 @@ from rigid_sim import parameters, sim_interfaces
 from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
 from rigid_sim.core.compile_cache import caching_note
+from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.scene import build_world, check_world_frame, load_scene
 from rigid_sim.core.warm_up import warm_up_reporting
@@ -45,7 +46,7 @@ def load(settings):
     return scene, build_world(scene, settings.integrator, settings.tolerance)
 
 
-def warm_up(world, name, logger, integrator=None):
+def warm_up(world, name, logger, integrator=None, imus=None):
     """Compile or load ``world``'s kernels, logging what compiles and why; the count.
 
     Nothing is logged when every kernel is in memory or numba's disk cache; otherwise a line
@@ -64,6 +65,8 @@ def warm_up(world, name, logger, integrator=None):
         Where the lines go (info level).
     integrator : rigid_sim.core.integrators.base.Integrator or None
         The method to compile for, when not the world's own.
+    imus : rigid_sim.core.imu.Imus or None
+        The world's IMUs, whose readings are compiled too.
 
     Returns
     -------
@@ -71,13 +74,14 @@ def warm_up(world, name, logger, integrator=None):
         Kernel specialisations compiled (0: all were loaded or already compiled).
     """
     effects = ', '.join(type(effect).__name__.lower() for effect in world.effects) or 'none'
+    readings = ' and its IMU readings' if imus is not None else ''
     seconds, compiled = warm_up_reporting(
         world, lambda: logger.info(
             f'compiling the {name} kernels for {world.bodies.count} bodies with effects '
-            f'[{effects}], not found in the kernel cache ({caching_note()}) ...'),
+            f'[{effects}]{readings}, not found in the kernel cache ({caching_note()}) ...'),
         lambda count, elapsed: logger.info(
             f'... still compiling: {count} kernels in {elapsed:.0f} s'),
-        integrator)
+        integrator, imus)
     if compiled:
         logger.info(f'compiled {compiled} kernels in {seconds:.1f} s')
     return compiled
@@ -113,7 +117,8 @@ class RigidSimNode(Node):
         self.get_logger().info(self._describe(self.settings.start_paused))
         self._warn_on_frame_mismatch()
         # Before any topic or service exists: once a client discovers one, the node answers.
-        self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger())
+        self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger(),
+                                imus=scene_imus(self.scene, self.world.bodies))
         self.ticks = 0
         self.qos_overrides = QosOverrides(self)
         self.clock = ClockOutput(self.qos_overrides)
@@ -245,7 +250,8 @@ class RigidSimNode(Node):
         """
         if scene_changed:
             scene, world = load(settings)
-            warm_up(world, settings.integrator, self.get_logger())
+            warm_up(world, settings.integrator, self.get_logger(),
+                    imus=scene_imus(scene, world.bodies))
             return scene, world
         integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
         warm_up(self.world, settings.integrator, self.get_logger(), integrator)

@@ -23,31 +23,32 @@ from rigid_sim.core.warm_up import Compilations
 from rigid_sim.node import warm_up as node_warm_up
 
 PACKAGE = Path(rigid_sim.__file__).resolve().parent
-# The child compiles one small core kernel for a signature nothing else uses and prints
-# where numba's cache is and how many kernels it had to compile.
-CHILD = '''
+# The children compile (or load) a small core kernel, check_substep, for a state of float32
+# that nothing else uses: two kernels, it and the helper that reads a quaternion.
+SMALL_KERNEL = 'kinematics.check_substep(np.ones((1, 13), np.float32))'
+SMALL_KERNEL_FILES = ('kinematics.check_substep', 'kinematics.orientation')
+# This one prints where numba's cache is and how many kernels it had to compile.
+CHILD = f'''
 import numpy as np
 from numba.core import event
 from rigid_sim.core import CACHE_DIRECTORY, kinematics
 from rigid_sim.core.warm_up import Compilations
 compilations = Compilations()
 with event.install_listener('numba:compile', compilations):
-    kinematics.cross(np.ones(3, np.float32), np.ones(3, np.float32))
+    {SMALL_KERNEL}
 print(CACHE_DIRECTORY, compilations.count)
 '''
 
 
-# The child compiles (or loads) two small kernels for a signature nothing else uses and
-# prints how many it compiled, how many damaged entries it deleted and the compile note.
-TWO_KERNELS = '''
+# This one prints how many it compiled, how many damaged entries it deleted and the note.
+TWO_KERNELS = f'''
 import numpy as np
 from numba.core import event
 from rigid_sim.core import compile_cache, kinematics
 from rigid_sim.core.warm_up import Compilations
 compilations = Compilations()
 with event.install_listener('numba:compile', compilations):
-    kinematics.cross(np.ones(3, np.float32), np.ones(3, np.float32))
-    kinematics.add(np.ones(3, np.float32), np.ones(3, np.float32))
+    {SMALL_KERNEL}
 print(compilations.count, compile_cache.STATE.healed, compile_cache.caching_note())
 '''
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
@@ -111,9 +112,10 @@ def run_child(environment):
 def test_a_process_caches_under_the_keyed_directory_and_not_in_the_package(tmp_path):
     """A kernel compiled in a process is cached under the keyed directory only.
 
-    With XDG_CACHE_HOME, then NUMBA_CACHE_DIR, set to empty directories: the kernel is
-    compiled once and written under <root>/rigid_sim/numba/<key>, a second process loads it
-    from there without compiling, and no cache file appears in the package tree.
+    With XDG_CACHE_HOME, then NUMBA_CACHE_DIR, set to empty directories: the kernel and its
+    helper are compiled once and written under <root>/rigid_sim/numba/<key>, a second
+    process loads them from there without compiling, and no cache file appears in the
+    package tree.
     """
     in_package = cached_files(PACKAGE)
     key = compile_cache.source_key()
@@ -123,7 +125,7 @@ def test_a_process_caches_under_the_keyed_directory_and_not_in_the_package(tmp_p
         root = tmp_path / variable
         environment = dict(base, **{variable: str(root)})
         expected = root / 'rigid_sim' / 'numba' / key
-        assert run_child(environment) == (expected, 1)
+        assert run_child(environment) == (expected, 2)
         assert cached_files(expected) and cached_files(root) == cached_files(expected)
         assert run_child(environment) == (expected, 0)
     assert cached_files(PACKAGE) == in_package
@@ -163,7 +165,7 @@ def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     """The node's warm-up logs before and after a compilation, and nothing without one."""
     logger = RecordingLogger()
     monkeypatch.setattr('rigid_sim.core.warm_up.warm_up',
-                        lambda world, integrator: _fresh_kernel(1.5))
+                        lambda world, integrator, imus: _fresh_kernel(1.5))
     world = SimpleNamespace(effects=[], bodies=SimpleNamespace(count=1))
     assert node_warm_up(world, 'rk4', logger) == 1
     assert len(logger.lines) == 2
@@ -172,6 +174,25 @@ def test_the_node_logs_compiling_only_when_something_compiles(monkeypatch):
     assert logger.lines[1].startswith('compiled 1 kernels in ')
     assert node_warm_up(world, 'rk4', logger) == 0
     assert len(logger.lines) == 2
+
+
+def test_the_node_warms_up_the_readings_of_its_scene_imus(ros_context, monkeypatch):
+    """A node on the IMU scene hands its IMU to the warm-up, which compiles its readings.
+
+    Without them the first tick would compile the readings, unannounced.
+    """
+    from rclpy.parameter import Parameter
+    from rigid_sim.node import RigidSimNode
+    handed = []
+    monkeypatch.setattr('rigid_sim.core.warm_up.warm_up',
+                        lambda world, integrator, imus: handed.append(imus) or 0.0)
+    node = RigidSimNode(context=ros_context,
+                        parameter_overrides=[Parameter('scene', value='imu.yaml')])
+    try:
+        assert len(handed) == 1 and handed[0] is not None
+        assert handed[0].bodies == node.imu_outputs.imus.bodies == [0]
+    finally:
+        node.destroy_node()
 
 
 def test_a_second_node_for_the_same_scene_compiles_nothing(ros_context):
@@ -224,7 +245,7 @@ def test_damaged_cache_files_are_warned_about_once_and_compiled_again(tmp_path):
     assert run_two_kernels(environment)[0] == (2, 0, cached)
     for damage, suffix in ((truncate, '.nbc'), (scribble, '.nbi')):
         damaged = [path for path in directory.rglob(f'*{suffix}')
-                   if path.name.startswith(('kinematics.cross', 'kinematics.add'))]
+                   if path.name.startswith(SMALL_KERNEL_FILES)]
         assert len(damaged) == 2
         for path in damaged:
             damage(path)

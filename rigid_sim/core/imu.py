@@ -59,6 +59,16 @@ def build_imus(scene_bodies, bodies, gravity, magnetic_field=None):
                 np.zeros(3) if magnetic_field is None else np.asarray(magnetic_field))
 
 
+def scene_imus(scene, bodies):
+    """Return the :class:`Imus` of ``scene`` on ``bodies`` (its RigidBodies), or None.
+
+    Their gravity is the scene's (none when it lists no gravity), and so is the magnetic
+    field their magnetometers read.
+    """
+    gravity = scene.effects.get('gravity', {}).get('acceleration')
+    return build_imus(scene.bodies, bodies, gravity, scene.magnetic_field)
+
+
 @dataclass(frozen=True)
 class Readings:
     """What K IMUs read at one time; rows in the order of the ``which`` asked for."""

@@ -6,12 +6,12 @@ With numpy the same dozen (K, 3) products cost more in call overhead than the st
 for a few IMUs (docs/performance.md); compiled, they cost about as much as one body-step.
 Formulas: :mod:`rigid_sim.core.imu`.
 """
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import kernel
 
 
-@njit(cache=True)
+@kernel
 def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, gravity,
              omega, specific_force):
     """Fill ``omega`` and ``specific_force`` (K, 3), body axes, of K IMUs.

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper
 from rigid_sim.core.effects.base import body_kernel_for
 from rigid_sim.core.input_values import checked, NormLimit
 
@@ -213,7 +213,7 @@ class AppliedWrenches:
 
 
 @body_kernel_for(WrenchInputs)
-@njit(cache=True)
+@helper
 def wrench_input(p, i, x, q, momentum, big_l, time, model):
     """Body ``i``'s held wrenches, world axes, about its centre of mass, at quaternion ``q``."""
     force = kin.vector(p.world_sum, i, 0)

@@ -9,14 +9,14 @@ body is ``[x, q, P, L]`` (see :mod:`rigid_sim.core.state`).
 """
 import math
 
-from numba import njit
+from rigid_sim.core.compiled import helper, kernel
 
 # Integrators return unit quaternions. One off by more than this overflowed before it was
 # normalised (to zeros: finite, but no rotation at all), and it is treated like a NaN.
 UNIT_QUATERNION_SLACK = 1e-6
 
 
-@njit(cache=True)
+@helper
 def matrix(q):
     """``R`` (9-tuple, row-major) of the quaternion ``q`` (x, y, z, w), Shoemake's formula.
 
@@ -28,7 +28,7 @@ def matrix(q):
             2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y))
 
 
-@njit(cache=True)
+@helper
 def rotate(r, v):
     """``R v`` for a row-major 9-tuple ``R`` (a rotation, or an inertia from :func:`entries`)."""
     return (r[0] * v[0] + r[1] * v[1] + r[2] * v[2],
@@ -36,7 +36,7 @@ def rotate(r, v):
             r[6] * v[0] + r[7] * v[1] + r[8] * v[2])
 
 
-@njit(cache=True)
+@helper
 def rotate_inverse(r, v):
     """``R^T v`` for a 9-tuple ``R`` and a 3-tuple ``v``."""
     return (r[0] * v[0] + r[3] * v[1] + r[6] * v[2],
@@ -44,25 +44,25 @@ def rotate_inverse(r, v):
             r[2] * v[0] + r[5] * v[1] + r[8] * v[2])
 
 
-@njit(cache=True)
+@helper
 def add(u, v):
     """``u + v`` of 3-tuples."""
     return (u[0] + v[0], u[1] + v[1], u[2] + v[2])
 
 
-@njit(cache=True)
+@helper
 def plus_scaled(u, a, v):
     """``u + a v`` of 3-tuples ``u``, ``v`` and a float ``a``."""
     return (u[0] + a * v[0], u[1] + a * v[1], u[2] + a * v[2])
 
 
-@njit(cache=True)
+@helper
 def plus_scaled4(u, a, v):
     """``u + a v`` of 4-tuples ``u``, ``v`` and a float ``a``."""
     return (u[0] + a * v[0], u[1] + a * v[1], u[2] + a * v[2], u[3] + a * v[3])
 
 
-@njit(cache=True)
+@helper
 def entries(m, i):
     """9-tuple (row-major) of the 3x3 matrix ``m[i]`` of an (N, 3, 3) array, without a view.
 
@@ -74,19 +74,19 @@ def entries(m, i):
             m[i, 2, 0], m[i, 2, 1], m[i, 2, 2])
 
 
-@njit(cache=True)
+@helper
 def cross(u, v):
     """``u x v`` of 3-tuples."""
     return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
 
 
-@njit(cache=True)
+@helper
 def dot(u, v):
     """``u . v`` of 3-tuples."""
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-@njit(cache=True)
+@helper
 def multiply(p, q):
     """Hamilton product ``p q`` of 4-tuples (x, y, z, w)."""
     return (p[3] * q[0] + q[3] * p[0] + p[1] * q[2] - p[2] * q[1],
@@ -95,20 +95,20 @@ def multiply(p, q):
             p[3] * q[3] - p[0] * q[0] - p[1] * q[1] - p[2] * q[2])
 
 
-@njit(cache=True)
+@helper
 def conjugate(q):
     """Inverse of a unit quaternion 4-tuple."""
     return (-q[0], -q[1], -q[2], q[3])
 
 
-@njit(cache=True)
+@helper
 def normalize(q):
     """``q / |q|`` of a 4-tuple."""
     scale = 1.0 / math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     return (q[0] * scale, q[1] * scale, q[2] * scale, q[3] * scale)
 
 
-@njit(cache=True)
+@helper
 def exp_map(v):
     """Return the unit quaternion (x, y, z, w) of rotation vector ``v`` (axis times angle, rad)."""
     angle = math.sqrt(dot(v, v))
@@ -118,26 +118,38 @@ def exp_map(v):
     return (v[0] * factor, v[1] * factor, v[2] * factor, math.cos(half))
 
 
-@njit(cache=True)
+@helper
 def orientation(y, i):
     """Quaternion 4-tuple of body ``i`` in the packed state ``y`` (N, 13)."""
     return (y[i, 3], y[i, 4], y[i, 5], y[i, 6])
 
 
-@njit(cache=True)
+@helper
 def vector(a, i, start):
     """3-tuple ``a[i, start:start + 3]``."""
     return (a[i, start], a[i, start + 1], a[i, start + 2])
 
 
-@njit(cache=True)
+@helper
 def store(a, i, start, v):
     """``a[i, start:start + len(v)] = v`` for a tuple ``v``."""
     for k in range(len(v)):
         a[i, start + k] = v[k]
 
 
-@njit(cache=True)
+@helper
+def copy_columns(target, at, source, start, count):
+    """``target[:, at:at + count] = source[:, start:start + count]`` of (N, m) arrays.
+
+    Element by element: numba compiles an array assignment with code to format its
+    shape-mismatch error, which cost more to compile than the kernels using it.
+    """
+    for i in range(source.shape[0]):
+        for k in range(count):
+            target[i, at + k] = source[i, start + k]
+
+
+@helper
 def angular_velocity(r, inertia_inv, angular_momentum):
     """``omega = R I_body^-1 R^T L``, world axes, rad/s: the one place it is defined.
 
@@ -158,7 +170,7 @@ def angular_velocity(r, inertia_inv, angular_momentum):
     return rotate(r, rotate(inertia_inv, rotate_inverse(r, angular_momentum)))
 
 
-@njit(cache=True)
+@kernel
 def angular_velocities(y, inertia_inv, out):
     """``omega`` (N, 3) of every body of the packed state ``y`` (N, 13) into ``out``."""
     for i in range(y.shape[0]):
@@ -167,7 +179,7 @@ def angular_velocities(y, inertia_inv, out):
     return out
 
 
-@njit(cache=True)
+@kernel
 def check_substep(y):
     """Check a state after a substep: 0 good, 1 non-finite, -1 a quaternion not unit.
 
@@ -185,13 +197,13 @@ def check_substep(y):
     return 0
 
 
-@njit(cache=True)
+@helper
 def body_state(y, i):
     """Return body ``i``'s ``x``, ``q``, ``P`` and ``L`` tuples from the packed state ``y``."""
     return vector(y, i, 0), orientation(y, i), vector(y, i, 7), vector(y, i, 10)
 
 
-@njit(cache=True)
+@helper
 def store_body(y, i, x, q, p, big_l):
     """Write body ``i``'s ``x``, ``q``, ``P`` and ``L`` tuples into the packed state ``y``."""
     store(y, i, 0, x)
@@ -200,7 +212,7 @@ def store_body(y, i, x, q, p, big_l):
     store(y, i, 10, big_l)
 
 
-@njit(cache=True)
+@helper
 def earlier_failure(first, code, substep):
     """Return the failure code a step reports: ``first`` (0: none) or ``code`` at ``substep``.
 
@@ -212,7 +224,7 @@ def earlier_failure(first, code, substep):
     return first
 
 
-@njit(cache=True)
+@helper
 def check_body(x, q, p, big_l):
     """:func:`check_substep` of one body's state tuples: 0 good, 1 non-finite, -1 not unit."""
     for v in (x, p, big_l):
@@ -227,7 +239,7 @@ def check_body(x, q, p, big_l):
     return 0
 
 
-@njit(cache=True)
+@kernel
 def largest_spin(y, inertia_inv, covered, held, everyone):
     """Largest ``|omega|``, rad/s, over the bodies ``everyone`` or ``covered | held`` selects.
 
@@ -243,7 +255,7 @@ def largest_spin(y, inertia_inv, covered, held, everyone):
     return math.sqrt(largest)
 
 
-@njit(cache=True)
+@helper
 def orientation_row(q, i):
     """4-tuple ``q[i, 0:4]`` of an (N, 4) quaternion array."""
     return (q[i, 0], q[i, 1], q[i, 2], q[i, 3])

@@ -19,9 +19,11 @@ took it). The registration runs at import, before any cached kernel is loaded.
 import math
 
 import llvmlite.binding as llvm
-from numba import carray, njit, types
+from numba import carray, types
 from numba.core import cgutils
 from numba.extending import get_cython_function_address, intrinsic
+
+from rigid_sim.core.compiled import helper, kernel
 
 _SYMBOL = 'rigid_sim_ellipkm1'
 llvm.add_symbol(_SYMBOL, get_cython_function_address('scipy.special.cython_special', 'ellipkm1'))
@@ -50,7 +52,7 @@ def _agm_ratios(typingctx):
     return types.CPointer(types.double)(), codegen
 
 
-@njit(cache=True)
+@kernel
 def sn_cn(u, mc):
     """Jacobi ``sn`` and ``cn`` of ``u`` at parameter ``m = 1 - mc``, from 0 < ``mc`` <= 1.
 
@@ -75,13 +77,13 @@ def sn_cn(u, mc):
     return math.sin(phi), math.cos(phi)
 
 
-@njit(cache=True)
+@helper
 def ellipkm1(mc):
     """Complete elliptic integral ``K`` at parameter ``m = 1 - mc``, from ``mc``."""
     return _ellipkm1(mc, 0)
 
 
-@njit(cache=True)
+@kernel
 def elliprf(x, y, z):
     """Carlson's symmetric integral ``R_F(x, y, z)``, x, y, z >= 0, at most one zero."""
     if (x == 0.0) + (y == 0.0) + (z == 0.0) > 1:
@@ -106,7 +108,7 @@ def elliprf(x, y, z):
 RC_SERIES = 1e-3
 
 
-@njit(cache=True)
+@helper
 def _elliprc_one(e, sp, p, lam, d):
     """Carlson's ``R_C(1, 1 + e)``, e > -1: ``atan(sqrt e) / sqrt e`` or its atanh twin.
 
@@ -125,7 +127,7 @@ def _elliprc_one(e, sp, p, lam, d):
     return math.log((1.0 + root) / math.sqrt(2.0 * sp * (p + lam) / d)) / root
 
 
-@njit(cache=True)
+@kernel
 def elliprj(x, y, z, p):
     """Evaluate Carlson's symmetric integral ``R_J(x, y, z, p)``.
 

@@ -18,16 +18,19 @@ registers with :func:`kernel_for`::
 
 adding its forces and torques into ``force`` and ``torque`` (N, 3) at the packed state ``y``
 (N, 13) = [x, q, P, L]. ``model`` is the :class:`~rigid_sim.core.state.Model` of the bodies.
-:func:`accumulate` compiles one loop over the tuple of parameters a scene lists, so numba
-builds a kernel specialised to exactly that set: an unlisted effect is not in the compiled
-code at all. When every listed effect acts per body (:func:`acts_per_body`), an integrator
-may instead take each body through a whole step in registers with :func:`body_wrench`.
+:func:`accumulate` sums them in one function written out for the tuple of parameter types
+a scene lists, so numba builds a kernel specialised to exactly that set: an unlisted effect
+is not in the compiled code at all. When every listed effect acts per body
+(:func:`acts_per_body`), an integrator may instead take each body through a whole step in
+registers with :func:`body_wrench`.
 """
+import itertools
+
 import numpy as np
-from numba import literal_unroll, njit
 from numba.extending import overload
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import kernel
 
 # NamedTuple class of an effect's parameters -> its compiled kernel: one that couples
 # bodies (the whole state in, the (N, 3) sums out) or one of a single body.
@@ -86,47 +89,7 @@ class Effect:
         return 0.0
 
 
-def _apply_one(parameters, y, time, model, force, torque):
-    """Typing stub: replaced, per parameter class, by that effect's kernel."""
-
-
-@overload(_apply_one)
-def _apply_one_overload(parameters, y, time, model, force, torque):
-    if parameters.instance_class in KERNELS:
-        kernel = KERNELS[parameters.instance_class]
-
-        def apply(parameters, y, time, model, force, torque):
-            """Call the registered kernel."""
-            kernel(parameters, y, time, model, force, torque)
-        return apply
-    body_kernel = BODY_KERNELS[parameters.instance_class]
-
-    def apply_per_body(parameters, y, time, model, force, torque):
-        """Call the kernel of one body for every body, adding into the sums."""
-        for i in range(y.shape[0]):
-            f, t = body_kernel(parameters, i, kin.vector(y, i, 0), kin.orientation(y, i),
-                               kin.vector(y, i, 7), kin.vector(y, i, 10), time, model)
-            for k in range(3):
-                force[i, k] += f[k]
-                torque[i, k] += t[k]
-    return apply_per_body
-
-
-def _body_one(parameters, i, x, q, p, big_l, time, model):
-    """Typing stub: replaced, per parameter class, by that effect's kernel of one body."""
-
-
-@overload(_body_one, inline='always')
-def _body_one_overload(parameters, i, x, q, p, big_l, time, model):
-    kernel = BODY_KERNELS[parameters.instance_class]
-
-    def apply(parameters, i, x, q, p, big_l, time, model):
-        """Call the registered kernel."""
-        return kernel(parameters, i, x, q, p, big_l, time, model)
-    return apply
-
-
-@njit(cache=True)
+@kernel
 def accumulate(effects, y, time, model, force, torque):
     """Write the net wrench of every effect in ``effects`` into ``force`` and ``torque``.
 
@@ -145,10 +108,11 @@ def accumulate(effects, y, time, model, force, torque):
     torque : (N, 3) float
         Overwritten with the net torque about each centre of mass, N m, world axes.
     """
-    force[:, :] = 0.0
-    torque[:, :] = 0.0
-    for parameters in literal_unroll(effects):
-        _apply_one(parameters, y, time, model, force, torque)
+    _sum_all(effects, y, time, model, force, torque)
+
+
+def _sum_all(effects, y, time, model, force, torque):
+    """Typing stub: :func:`accumulate`'s sum, written out for the types in ``effects``."""
 
 
 def body_wrench(effects, i, x, q, p, big_l, time, model):
@@ -160,33 +124,67 @@ def body_wrench(effects, i, x, q, p, big_l, time, model):
     """
 
 
-# Inlined into the caller's IR, as is _body_one: as separate functions, every nested call
-# passed and reference-counted the effects' arrays, for every body and stage, which made
-# the sum some 70 times slower (docs/performance.md, "A body at a time").
+# The sums over a scene's effects are written out as Python source for its tuple of
+# parameter types, one statement per effect, and compiled as one function: numba types it
+# once. A recursion over the tuple (an overload per remaining tuple type) or literal_unroll
+# made numba type the same code again and again, which took most of a cold start's
+# compile time (docs/performance.md, "Compile cost").
+def _written_out(name, arguments, lines, effects):
+    """Return the function ``name(effects, arguments)`` whose body is the source ``lines``.
+
+    The lines are indented one level inside it; its globals are ``kin`` (the kinematics
+    module) and ``kernel<k>``, the kernel registered for ``effects[k]``'s class.
+    """
+    names = {'kin': kin}
+    for k, parameters in enumerate(effects):
+        kind = parameters.instance_class
+        names[f'kernel{k}'] = KERNELS[kind] if kind in KERNELS else BODY_KERNELS[kind]
+    source = [f'def {name}(effects, {arguments}):'] + ['    ' + line for line in lines]
+    exec('\n'.join(source), names)   # noqa: S102  source made above, from names only
+    return names[name]
+
+
+def _body_terms(indices, force, torque):
+    """Lines adding the terms of the body kernels ``effects[k]``, k in ``indices``.
+
+    The running sums are the tuples named ``force`` and ``torque``; body ``i``'s state is
+    ``x, q, p, big_l``.
+    """
+    lines = []
+    for k in indices:
+        lines += [f'f, t = kernel{k}(effects[{k}], i, x, q, p, big_l, time, model)',
+                  f'{force}, {torque} = kin.add({force}, f), kin.add({torque}, t)']
+    return lines
+
+
+# Inlined into the caller's IR: as a function, every call per body and stage passed and
+# reference-counted the effects' arrays, which made the sum some 70 times slower
+# (docs/performance.md, "A body at a time").
 @overload(body_wrench, inline='always')
 def _body_wrench_overload(effects, i, x, q, p, big_l, time, model):
-    def total(effects, i, x, q, p, big_l, time, model):
-        """Fold the effects' terms onto zero."""
-        zero = (0.0, 0.0, 0.0)
-        return _fold(effects, zero, zero, i, x, q, p, big_l, time, model)
-    return total
+    lines = (['force = torque = (0.0, 0.0, 0.0)']
+             + _body_terms(range(len(effects)), 'force', 'torque') + ['return force, torque'])
+    return _written_out('body_wrench_sum', 'i, x, q, p, big_l, time, model', lines, effects)
 
 
-def _fold(effects, force, torque, i, x, q, p, big_l, time, model):
-    """Typing stub: ``force`` and ``torque`` plus the terms of ``effects``, first to last."""
-
-
-@overload(_fold, inline='always')
-def _fold_overload(effects, force, torque, i, x, q, p, big_l, time, model):
-    if len(effects) == 0:
-        def done(effects, force, torque, i, x, q, p, big_l, time, model):
-            """Nothing left to add."""
-            return force, torque
-        return done
-
-    def add_first(effects, force, torque, i, x, q, p, big_l, time, model):
-        """Add the first effect's term, then fold the rest (a tuple type of its own)."""
-        f, t = _body_one(effects[0], i, x, q, p, big_l, time, model)
-        return _fold(effects[1:], kin.add(force, f), kin.add(torque, t), i, x, q, p, big_l,
-                     time, model)
-    return add_first
+@overload(_sum_all)
+def _sum_all_overload(effects, y, time, model, force, torque):
+    lines = ['for i in range(y.shape[0]):',
+             '    for k in range(3):',
+             '        force[i, k] = 0.0',
+             '        torque[i, k] = 0.0']
+    coupling = [parameters.instance_class in KERNELS for parameters in effects]
+    for couples, run in itertools.groupby(range(len(effects)), coupling.__getitem__):
+        if couples:
+            lines += [f'kernel{k}(effects[{k}], y, time, model, force, torque)' for k in run]
+            continue
+        # Consecutive per-body effects in one pass: each adds into a body's sums in turn.
+        terms = _body_terms(run, 'body_force', 'body_torque')
+        lines += ['for i in range(y.shape[0]):',
+                  '    x, q, p, big_l = kin.body_state(y, i)',
+                  '    body_force = kin.vector(force, i, 0)',
+                  '    body_torque = kin.vector(torque, i, 0)',
+                  *['    ' + line for line in terms],
+                  '    kin.store(force, i, 0, body_force)',
+                  '    kin.store(torque, i, 0, body_torque)']
+    return _written_out('sum_all', 'y, time, model, force, torque', lines, effects)

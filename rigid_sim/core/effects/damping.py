@@ -9,9 +9,9 @@ same thing for a microgram part and a crane load, and the decay has a closed for
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core.effects.base import Effect, body_kernel_for
+from rigid_sim.core.compiled import helper
 
 
 class DampingParameters(NamedTuple):
@@ -43,7 +43,7 @@ class Damping(Effect):
 
 
 @body_kernel_for(DampingParameters)
-@njit(cache=True)
+@helper
 def damping_wrench(parameters, i, x, q, p, big_l, time, model):
     """``-c_lin P`` and ``-c_ang L`` of one body."""
     linear, angular = parameters.linear, parameters.angular

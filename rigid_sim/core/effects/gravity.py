@@ -4,9 +4,9 @@
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core.effects.base import Effect, body_kernel_for
+from rigid_sim.core.compiled import helper
 from rigid_sim.core.state import POSITION
 
 
@@ -35,7 +35,7 @@ class Gravity(Effect):
 
 
 @body_kernel_for(GravityParameters)
-@njit(cache=True)
+@helper
 def gravity_wrench(parameters, i, x, q, p, big_l, time, model):
     """Body ``i``'s weight, at its centre of mass: no torque."""
     weight = parameters.weight

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.effects.base import Effect, body_kernel_for, kernel_for
 
 
@@ -150,7 +150,7 @@ class Springs(Effect):
         return float(0.5 * np.sum(p.stiffness * (lengths - p.rest) ** 2))
 
 
-@njit(cache=True)
+@helper
 def _end_position(y, body, lever, s):
     """World position of the end at ``lever[s]`` on ``body``, its ``R`` and lever ``R r``."""
     r = kin.matrix(kin.orientation(y, body))
@@ -158,7 +158,7 @@ def _end_position(y, body, lever, s):
     return (y[body, 0] + arm[0], y[body, 1] + arm[1], y[body, 2] + arm[2]), r, arm
 
 
-@njit(cache=True)
+@helper
 def _end(y, model, body, lever, s):
     """World position, velocity and lever ``R r`` of the end at ``lever[s]`` on ``body``."""
     position, r, arm = _end_position(y, body, lever, s)
@@ -172,7 +172,7 @@ def _end(y, model, body, lever, s):
 
 
 # Inlined: a call inside a loop keeps the caller's array references alive across it.
-@njit(cache=True, inline='always')
+@helper(inline='always')
 def _tension(k, c, rest, first, second, first_velocity, second_velocity):
     """Force on the first end of a spring ``k``, damper ``c``: Hooke's law plus the damper.
 
@@ -191,7 +191,7 @@ def _tension(k, c, rest, first, second, first_velocity, second_velocity):
     return (-k * d[0] - c * dv[0], -k * d[1] - c * dv[1], -k * d[2] - c * dv[2])
 
 
-@njit(cache=True)
+@helper
 def _add(force, torque, body, f, arm):
     """Add the force ``f`` acting at lever ``arm`` (world) on ``body``."""
     moment = kin.cross(arm, f)
@@ -201,7 +201,7 @@ def _add(force, torque, body, f, arm):
 
 
 @kernel_for(SpringParameters)
-@njit(cache=True)
+@helper
 def spring_wrench(p, y, time, model, force, torque):
     """Add every spring's force and torque on its bodies to ``force``, ``torque`` (N, 3)."""
     for s in range(p.body.size):
@@ -220,7 +220,7 @@ def spring_wrench(p, y, time, model, force, torque):
 
 
 @body_kernel_for(AnchoredSpringParameters)
-@njit(cache=True, inline='always')
+@helper(inline='always')
 def anchored_spring_wrench(p, i, x, q, momentum, big_l, time, model):
     """Force and torque (3-tuples) of the springs holding body ``i`` to the world.
 
@@ -245,7 +245,7 @@ def anchored_spring_wrench(p, i, x, q, momentum, big_l, time, model):
     return force, torque
 
 
-@njit(cache=True)
+@kernel
 def spring_lengths(p, y, out):
     """Length of each spring (S,), m, at the packed state ``y``, into ``out``."""
     for s in range(p.body.size):

@@ -8,7 +8,6 @@ same relative accuracy as a kilogram one (an absolute tolerance would swamp the 
 starve the second). The right-hand side is one compiled call.
 """
 import numpy as np
-from scipy.integrate import RK45
 
 from rigid_sim.core import safeguards
 from rigid_sim.core.integrators.base import Integrator
@@ -32,6 +31,10 @@ class Dopri5(Integrator):
 
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)
+        # Imported here: scipy.integrate takes a third of a second, which every start of the
+        # node paid before it was needed only by this method.
+        from scipy.integrate import RK45
+        self._stepper = RK45
         self._step_size = None
         bodies = self.bodies
         self._inertia_scale = np.trace(bodies.inertia_body, axis1=1, axis2=2)  # kg m^2
@@ -82,9 +85,9 @@ class Dopri5(Integrator):
                                             slope_out).ravel().copy()
 
         end = time + dt
-        solver = RK45(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
-                      atol=self.tolerance * self._scale(z, dt).ravel(),
-                      first_step=min(self._step_size or dt, end - time))
+        solver = self._stepper(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
+                               atol=self.tolerance * self._scale(z, dt).ravel(),
+                               first_step=min(self._step_size or dt, end - time))
         self.last_substeps = 0
         while solver.status == 'running':
             message = solver.step()

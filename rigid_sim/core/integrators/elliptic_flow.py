@@ -9,9 +9,9 @@ See :mod:`~rigid_sim.core.integrators.free_rotation` for the method and the work
 import math
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper
 from rigid_sim.core.special import ellipkm1, elliprf, elliprj, sn_cn
 
 # Near the separatrix (a spin close to the intermediate axis) cn(u) is as small as
@@ -26,23 +26,23 @@ NEAR_SEPARATRIX = 1e-6
 EXPANSION_MC = 1e-16
 
 
-@njit(cache=True)
+@helper
 def separatrix_gap(i, m):
     """``L^2 - 2 E I2``, summed without cancelling the I2 term."""
     return m[0] ** 2 * (i[0] - i[1]) / i[0] + m[2] ** 2 * (i[2] - i[1]) / i[2]
 
 
-@njit(cache=True)
+@helper
 def _sign(x):
     return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
 
 
-@njit(cache=True)
+@helper
 def _unit_interval(x):
     return min(max(x, 0.0), 1.0)
 
 
-@njit(cache=True)
+@helper
 def _invariants(i, m):
     """Complementary parameter mc, squared amplitudes' roots (3-tuple) and rate of m(t)."""
     i1, i2, i3 = i
@@ -58,7 +58,7 @@ def _invariants(i, m):
     return mc, amplitude, rate
 
 
-@njit(cache=True)
+@helper
 def _pi_minus(nu, s, c, dn2, first_kind):
     """Evaluate Legendre's ``Pi(-nu; phi | k^2)`` for |phi| <= pi/2.
 
@@ -68,7 +68,7 @@ def _pi_minus(nu, s, c, dn2, first_kind):
     return first_kind - nu / 3.0 * s ** 3 * elliprj(c * c, dn2, 1.0, 1.0 + nu * s * s)
 
 
-@njit(cache=True)
+@helper
 def _sn_cn_first_order(u, mc):
     """Evaluate ``sn`` and ``cn`` of ``u`` to first order in a tiny ``mc`` (A&S 16.15.1-2).
 
@@ -79,7 +79,7 @@ def _sn_cn_first_order(u, mc):
     return tanh + correction * sech, sech - correction * tanh
 
 
-@njit(cache=True)
+@helper
 def _sn_cn_near_separatrix(v, mc, quarter):
     """Evaluate ``sn`` and ``cn`` of ``v`` (|v| <= K) for 0 < mc < NEAR_SEPARATRIX.
 
@@ -99,7 +99,7 @@ def _sn_cn_near_separatrix(v, mc, quarter):
     return _sign(v) * sn_w, cn_w
 
 
-@njit(cache=True)
+@helper
 def _jacobi_sn_cn(v, mc, quarter):
     """Evaluate ``sn`` and ``cn`` of the reduced ``v`` (|v| <= K) at ``m = 1 - mc``.
 
@@ -113,14 +113,14 @@ def _jacobi_sn_cn(v, mc, quarter):
     return sn_cn(v, mc)
 
 
-@njit(cache=True)
+@helper
 def shape_constants(i):
     """Return ``a1 / a2`` (finite for a pure spin) and ``nu`` of working-frame moments ``i``."""
     i1, i2, i3 = i
     return math.sqrt(i1 * (i3 - i2) / (i2 * (i3 - i1))), i3 * (i2 - i1) / (i1 * (i3 - i2))
 
 
-@njit(cache=True)
+@helper
 def elliptic_working(i, m, time, ratio, nu):
     """Advance m and build ``B0^T Rz(dpsi) B1`` in the working frame.
 
@@ -179,7 +179,7 @@ def elliptic_working(i, m, time, ratio, nu):
     return m_new, core
 
 
-@njit(cache=True)
+@helper
 def _half_angle(c, s):
     """``(cos, sin)`` of half of ``atan2(s, c)`` (in (-pi, pi]; (1, 0) for c = s = 0).
 
@@ -198,7 +198,7 @@ def _half_angle(c, s):
     return 0.5 * abs(s) / (r * sin_half), math.copysign(sin_half, s)
 
 
-@njit(cache=True)
+@helper
 def _quarter_turns(half, turns):
     """``half`` (cos, sin) turned by ``turns`` quarter turns: half of ``turns`` half turns."""
     k = turns - 4.0 * math.floor(0.25 * turns)
@@ -212,13 +212,13 @@ def _quarter_turns(half, turns):
     return c, s
 
 
-@njit(cache=True)
+@helper
 def _half_polar(m):
     """``(cos, sin)`` of half the angle between m and the working axis 3 (in [0, pi])."""
     return _half_angle(m[2], math.sqrt(m[0] * m[0] + m[1] * m[1]))
 
 
-@njit(cache=True)
+@helper
 def _zyz(a, b, c):
     """Quaternion ``(x, y, z, w)`` of ``Rz(alpha) Ry(beta) Rz(gamma)``.
 

@@ -33,9 +33,9 @@ No NaN is produced for ``mc -> 0`` (on the separatrix ``K = inf`` and no period 
 import math
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.integrators.elliptic_flow import (elliptic_working, separatrix_gap,
                                                       shape_constants)
 
@@ -77,7 +77,7 @@ def torque_free_flow(moments, angular_momentum_body, orientation, dt):
     return m, q
 
 
-@njit(cache=True)
+@kernel
 def _flow_all(moments, m, q, dt):
     """:func:`free_flow` of every row of ``m`` (N, 3) and ``q`` (N, 4), in place."""
     for i in range(m.shape[0]):
@@ -87,7 +87,7 @@ def _flow_all(moments, m, q, dt):
         kin.store(q, i, 0, q_new)
 
 
-@njit(cache=True)
+@helper
 def _sorted_axes(i):
     """Return the indices (3-tuple) that sort the moments ``i`` ascending, ties kept in order."""
     a, b, c = 0, 1, 2
@@ -100,7 +100,7 @@ def _sorted_axes(i):
     return a, b, c
 
 
-@njit(cache=True)
+@helper
 def free_flow(moments, m, q, dt):
     """Body-axes ``m`` (3-tuple) and unit ``q`` (4-tuple) after ``dt`` of torque-free motion.
 
@@ -128,7 +128,7 @@ def free_flow(moments, m, q, dt):
     return m_new, kin.normalize(kin.multiply(q, step))
 
 
-@njit(cache=True)
+@helper
 def _symmetric(mom, order, s, equal_12, equal_23, saddle, m, time):
     """Step a symmetric top, or a spin about the intermediate axis, by its closed form."""
     index = order[0] if equal_23 and not equal_12 else order[2]
@@ -139,13 +139,13 @@ def _symmetric(mom, order, s, equal_12, equal_23, saddle, m, time):
     return _axisymmetric(_unit_axis(index), i_axis, i_perp, m, time)
 
 
-@njit(cache=True)
+@helper
 def _unit_axis(index):
     """Return the unit vector e_index as a 3-tuple."""
     return (1.0 if index == 0 else 0.0, 1.0 if index == 1 else 0.0, 1.0 if index == 2 else 0.0)
 
 
-@njit(cache=True)
+@helper
 def _axisymmetric(axis, i_axis, i_perp, m, time):
     """Closed-form free motion of symmetric tops: new m and body rotation (working units).
 
@@ -168,7 +168,7 @@ def _axisymmetric(axis, i_axis, i_perp, m, time):
     return m_new, step
 
 
-@njit(cache=True)
+@helper
 def _working_frame(order, s, m):
     """Return the working frame (9-tuple, body to working) of ``m`` and its moments (3-tuple).
 
@@ -188,7 +188,7 @@ def _working_frame(order, s, m):
     return (x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]), moments
 
 
-@njit(cache=True)
+@helper
 def _matrix_quaternion(r):
     """Quaternion (x, y, z, w) of a rotation matrix 9-tuple (Shepperd's method)."""
     trace = r[0] + r[4] + r[8]
@@ -208,7 +208,7 @@ def _matrix_quaternion(r):
     return ((r[2] + r[6]) / (4.0 * z), (r[5] + r[7]) / (4.0 * z), z, (r[3] - r[1]) / (4.0 * z))
 
 
-@njit(cache=True)
+@helper
 def _asymmetric(order, s, m, time):
     """Elliptic free motion of an asymmetric body.
 

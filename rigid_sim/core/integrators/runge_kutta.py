@@ -14,10 +14,10 @@ hold ``L_b``.
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.integrators.base import Integrator
@@ -60,17 +60,17 @@ CLASSICAL_RK4 = Tableau(
 )
 
 
-@njit(cache=True)
+@helper
 def _to_internal(y, start, body_axes):
     """``start`` = ``y``, with ``L_b = R^T L`` in slots 10:13 when ``body_axes``."""
-    start[:, :] = y
+    kin.copy_columns(start, 0, y, 0, 13)
     if body_axes:
         for i in range(y.shape[0]):
             r = kin.matrix(kin.orientation(y, i))
             kin.store(start, i, 10, kin.rotate_inverse(r, kin.vector(y, i, 10)))
 
 
-@njit(cache=True)
+@helper
 def _derivative(q, momentum, angular, force, torque, inertia_inv, inverse_mass, body_axes):
     """``d/dt`` of a body's internal state: (dx, dq, dP, dL) tuples.
 
@@ -94,7 +94,7 @@ def _derivative(q, momentum, angular, force, torque, inertia_inv, inverse_mass, 
     return dx, (0.5 * dq[0], 0.5 * dq[1], 0.5 * dq[2], 0.5 * dq[3]), force, dl
 
 
-@njit(cache=True)
+@helper
 def _slope(world, momentum, model, force, torque, body_axes, i):
     """:func:`_derivative` of body ``i`` of a stage held in arrays.
 
@@ -107,7 +107,7 @@ def _slope(world, momentum, model, force, torque, body_axes, i):
                        model.inverse_mass[i], body_axes)
 
 
-@njit(cache=True)
+@helper
 def _set_stage(start, i, step, slope, world, momentum, body_axes):
     """Body ``i`` of the stage ``start + step slope``, into ``world`` and ``momentum``."""
     dx, dq, dp, dl = slope
@@ -123,7 +123,7 @@ def _set_stage(start, i, step, slope, world, momentum, body_axes):
     kin.store(world, i, 10, angular)
 
 
-@njit(cache=True)
+@helper
 def _add_slope(y, i, weight, slope):
     """``y[i] += weight slope`` in the internal layout."""
     dx, dq, dp, dl = slope
@@ -135,7 +135,7 @@ def _add_slope(y, i, weight, slope):
         y[i, 3 + k] += weight * dq[k]
 
 
-@njit(cache=True)
+@helper
 def _to_public(y, body_axes):
     """Normalise the quaternions and turn ``L_b`` (slots 10:13) into world-axes ``L``, in place."""
     for i in range(y.shape[0]):
@@ -145,7 +145,7 @@ def _to_public(y, body_axes):
             kin.store(y, i, 10, kin.rotate(kin.matrix(q), kin.vector(y, i, 10)))
 
 
-@njit(cache=True)
+@helper
 def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
     """One step of ``h`` on ``y`` in place.
 
@@ -154,9 +154,9 @@ def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
     """
     start, world, momentum, force, torque = work
     _to_internal(y, start, body_axes)
-    world[:, :] = y
-    momentum[:, :] = start[:, 10:13]
-    y[:, 10:13] = momentum   # y now sums the step in the internal layout
+    kin.copy_columns(world, 0, y, 0, 13)
+    kin.copy_columns(momentum, 0, start, 10, 3)
+    kin.copy_columns(y, 10, momentum, 0, 3)   # y now sums the step in the internal layout
     for stage in range(b.size):
         accumulate(effects, world, time + c[stage] * h, model, force, torque)
         following = a[stage + 1] * h if stage + 1 < b.size else 0.0
@@ -168,7 +168,7 @@ def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
     _to_public(y, body_axes)
 
 
-@njit(cache=True)
+@kernel
 def body_momentum_derivative(inner, work, model, effects, time, out):
     """Compute the time derivative of the body-axes internal state, for an external stepper.
 
@@ -199,25 +199,26 @@ def body_momentum_derivative(inner, work, model, effects, time, out):
                    True)
     accumulate(effects, world, time, model, force, torque)
     for i in range(inner.shape[0]):
-        out[i, :] = 0.0
+        for k in range(13):
+            out[i, k] = 0.0
         _add_slope(out, i, 1.0, _slope(world, momentum, model, force, torque, True, i))
     return out
 
 
-@njit(cache=True)
+@kernel
 def to_body_axes(y, start):
     """``start`` (N, 13) = ``y`` with ``L_b = R^T L`` in slots 10:13."""
     _to_internal(y, start, True)
 
 
-@njit(cache=True)
+@kernel
 def from_body_axes(start, y):
     """``y`` (N, 13) = ``start`` with a unit quaternion and world ``L`` from ``L_b``."""
-    y[:, :] = start
+    kin.copy_columns(y, 0, start, 0, 13)
     _to_public(y, True)
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes):
     """``substeps`` steps of ``h`` of the tableau (a, b, c) on ``y`` in place; failure code."""
     for k in range(substeps):
@@ -228,7 +229,7 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes)
     return 0
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_axes):
     """:func:`_runge_kutta` for effects that each act on one body: a body at a time.
 
@@ -276,25 +277,25 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_ax
 
 # One kernel per formulation, the flag a constant inside: compiled in, the per-body branch
 # on it disappears, which a runtime flag keeps in every body's loop.
-@njit(cache=True)
+@kernel
 def body_axes_runge_kutta(y, work, model, effects, time, h, substeps, a, b, c):
     """:func:`_runge_kutta` on body-axes angular momentum."""
     return _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, True)
 
 
-@njit(cache=True)
+@kernel
 def world_axes_runge_kutta(y, work, model, effects, time, h, substeps, a, b, c):
     """:func:`_runge_kutta` on Baraff's world-axes angular momentum."""
     return _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, False)
 
 
-@njit(cache=True)
+@kernel
 def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, a, b, c):
     """:func:`_runge_kutta_per_body` on body-axes angular momentum (``work`` unused)."""
     return _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, True)
 
 
-@njit(cache=True)
+@kernel
 def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, a, b, c):
     """:func:`_runge_kutta_per_body` on world-axes angular momentum (``work`` unused)."""
     return _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, False)

@@ -23,10 +23,10 @@ integrated by an explicit Runge-Kutta method of the splitting's own order.
 import math
 
 import numpy as np
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.integrators.base import Integrator
@@ -40,7 +40,7 @@ YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
 DLM_DRIFT, EXACT_DRIFT = 0, 1   # which free rotation a kernel drifts with
 
 
-@njit(cache=True)
+@helper
 def _dlm_axis(momentum, q, axis, theta):
     """``L_b`` turned by ``-theta`` and ``q`` by ``+theta`` about principal axis ``axis``."""
     cos, sin = math.cos(theta), math.sin(theta)
@@ -60,7 +60,7 @@ def _dlm_axis(momentum, q, axis, theta):
     return (m[0] * cos + m[1] * sin, m[1] * cos - m[0] * sin, m[2]), q
 
 
-@njit(cache=True)
+@helper
 def dlm_rotation(moments, momentum, q, h):
     """Free rotation for ``h`` as rotations about principal axes 1, 2, 3, 2, 1 (DLM 1997).
 
@@ -75,7 +75,7 @@ def dlm_rotation(moments, momentum, q, h):
     return momentum, q
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     """One body's free motion for ``h``: its new ``x``, ``q`` and world ``L`` (tuples).
 
@@ -100,7 +100,7 @@ def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     return x, q, big_l
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _drift(y, model, h, drift):
     """Free motion for ``h`` of every body, in place."""
     for i in range(y.shape[0]):
@@ -113,7 +113,7 @@ def _drift(y, model, h, drift):
         kin.store(y, i, 10, big_l)
 
 
-@njit(cache=True)
+@helper
 def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
     """Momenta after ``h`` of the wrench at fixed x and q, in place."""
     start, slopes, force, torque = work
@@ -125,7 +125,7 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
                 y[i, 10 + k] += h * torque[i, k]
         return
     n = y.shape[0]
-    start[:, :] = y[:, 7:13]
+    kin.copy_columns(start, 0, y, 7, 6)
     for stage in range(b.size):
         for i in range(n):
             for j in range(6):
@@ -135,8 +135,10 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
                         value += h * a[stage, s] * slopes[s, i, j]
                 y[i, 7 + j] = value
         accumulate(effects, y, time, model, force, torque)
-        slopes[stage, :, 0:3] = force
-        slopes[stage, :, 3:6] = torque
+        for i in range(n):
+            for k in range(3):
+                slopes[stage, i, k] = force[i, k]
+                slopes[stage, i, 3 + k] = torque[i, k]
     for i in range(n):
         for j in range(6):
             value = start[i, j]
@@ -145,7 +147,7 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
             y[i, 7 + j] = value
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
                         a, b, drift):
     """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
@@ -172,7 +174,7 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
     return 0
 
 
-@njit(cache=True)
+@helper(inline='always')
 def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift):
     """:func:`_strang_composition` for effects that each act on one body.
 
@@ -222,7 +224,7 @@ def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift)
 
 
 # One kernel per drift, the choice a constant inside, so the per-body branch compiles away.
-@njit(cache=True)
+@kernel
 def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
                          velocity_dependent, a, b):
     """:func:`_strang_composition` drifting with the exact free flow."""
@@ -230,7 +232,7 @@ def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
                                velocity_dependent, a, b, EXACT_DRIFT)
 
 
-@njit(cache=True)
+@kernel
 def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_dependent, a,
                   b):
     """:func:`_strang_composition` drifting with the DLM rotations."""
@@ -238,14 +240,14 @@ def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_
                                velocity_dependent, a, b, DLM_DRIFT)
 
 
-@njit(cache=True)
+@kernel
 def exact_flow_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
                                   velocity_dependent, a, b):
     """:func:`_strang_per_body` with the exact free flow (``work`` unused)."""
     return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, EXACT_DRIFT)
 
 
-@njit(cache=True)
+@kernel
 def dlm_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
                            velocity_dependent, a, b):
     """:func:`_strang_per_body` drifting with the DLM rotations (``work`` unused)."""

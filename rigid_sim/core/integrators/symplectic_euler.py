@@ -1,16 +1,16 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
 """Semi-implicit (symplectic) Euler: kick the momenta, then drift with the new velocities."""
-from numba import njit
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.integrators.base import Integrator
 
 
-@njit(cache=True)
+@helper
 def _kick_drift(y, model, force, torque, h):
     """Momenta kicked by the wrench, then x and q drifted with the new velocities."""
     for i in range(y.shape[0]):
@@ -27,7 +27,7 @@ def _kick_drift(y, model, force, torque, h):
         kin.store(y, i, 3, kin.normalize(kin.multiply(turn, q)))
 
 
-@njit(cache=True)
+@kernel
 def semi_implicit_euler(y, model, effects, time, h, substeps, force, torque):
     """``substeps`` steps of ``h`` on ``y`` in place; the failure code of ``advance``."""
     for k in range(substeps):
