@@ -22,6 +22,7 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
+from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.scene import build_world
 from rigid_sim.core.scene_edit import (
     bodies_from_file, body_from_text, carry_over, check_name, placed, SpawnRefused,
@@ -98,7 +99,7 @@ class SceneEditor:
             new_scene, kept, note = edit.build(scene)
             world = build_world(new_scene, settings.integrator, settings.tolerance)
             from rigid_sim.node import warm_up   # the node imports this module
-            warm_up(world, settings.integrator, logger)
+            warm_up(world, settings.integrator, logger, imus=scene_imus(new_scene, world.bodies))
             return scene, new_scene, world, kept, note
 
         edit.preparation = Preparation(settings, work)
