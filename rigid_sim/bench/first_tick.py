@@ -48,6 +48,7 @@ def first_clock(scene, integrator, cache_dir, log_dir):
     finally:
         if node.poll() is None:
             node.kill()
+        executor.shutdown()
         listener.destroy_node()
         rclpy.try_shutdown(context=context)
     return ticked[0] - start if ticked else float('nan')
