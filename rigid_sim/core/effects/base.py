@@ -169,10 +169,7 @@ def _body_wrench_overload(effects, i, x, q, p, big_l, time, model):
 
 @overload(_sum_all)
 def _sum_all_overload(effects, y, time, model, force, torque):
-    lines = ['for i in range(y.shape[0]):',
-             '    for k in range(3):',
-             '        force[i, k] = 0.0',
-             '        torque[i, k] = 0.0']
+    lines = ['force[:, :] = 0.0', 'torque[:, :] = 0.0']
     coupling = [parameters.instance_class in KERNELS for parameters in effects]
     for couples, run in itertools.groupby(range(len(effects)), coupling.__getitem__):
         if couples:
