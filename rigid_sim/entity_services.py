@@ -104,13 +104,8 @@ class EntityServices:
         return response
 
     def _on_states(self, request, response, reply):
-        found = self._matching(request.filters)
-        if isinstance(found, tuple):
-            response.result = result(*found)
-            return response
-        response.entities = found
-        response.states = [self._state_message(self._index(name)) for name in found]
-        response.result = result(si_msg.Result.RESULT_OK)
+        response = self._on_entities(request, response, reply)   # no entity on a refusal
+        response.states = [self._state_message(self._index(name)) for name in response.entities]
         return response
 
     def _on_set_state(self, request, response, reply):
