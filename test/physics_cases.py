@@ -65,13 +65,15 @@ def make_world(bodies, origin, orientation, velocity, angular_velocity, effects=
                integrator='rk4', tolerance=1e-6, auto_substep=False, inputs=None):
     """World from the pose and twist of each body frame, (N, 3) / (N, 4), world axes.
 
-    Sub-stepping is off by default: these cases measure the bare methods (orders, errors).
+    Sub-stepping (by bounds and by error estimate) is off by default: these cases measure
+    the bare methods (orders, errors).
     ``inputs`` are the world's held wrenches (AppliedWrenches), if any.
     """
     initial = initial_state(bodies, np.reshape(origin, (-1, 3)), np.reshape(orientation, (-1, 4)),
                             np.reshape(velocity, (-1, 3)), np.reshape(angular_velocity, (-1, 3)))
     return World(bodies, initial, effects, integrator=integrator, tolerance=tolerance,
-                 auto_substep=auto_substep, inputs=inputs)
+                 auto_substep=auto_substep, inputs=inputs,
+                 error_control=auto_substep)
 
 
 def advance(world, dt, duration):

@@ -17,7 +17,7 @@ from rigid_sim.core.effects.base import acts_per_body
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.inputs import AppliedWrenches
-from rigid_sim.core.integrators import make_integrator, runge_kutta, splitting
+from rigid_sim.core.integrators import REGISTRY, make_integrator, runge_kutta, splitting
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
@@ -83,6 +83,7 @@ def test_guard_plans_afresh_for_an_integrator_swapped_between_steps():
     Stepped with rk4 it takes one substep; once the world's integrator is swapped for
     exact_split (as the node does when its parameter changes), the very next step plans its
     split before it starts, not only when the end-of-step check finds the bound broken.
+    Error control is off: the bounds are under test.
     """
     bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
                          np.zeros((1, 3)))
@@ -90,7 +91,7 @@ def test_guard_plans_afresh_for_an_integrator_swapped_between_steps():
                       [[0.0, 0.0, 20.0]])
     wrenches = AppliedWrenches(bodies)
     wrenches.hold(0, 'push', 'body', (0.0, 0.0, 0.0), (0.0, 0.0, 0.1))
-    world = World(bodies, y, [], 'rk4', inputs=wrenches)
+    world = World(bodies, y, [], 'rk4', inputs=wrenches, error_control=False)
     world.step(0.01)
     assert world.diagnostics.substeps == 1
     world.integrator = make_integrator('exact_split', world, 1e-6)
@@ -126,31 +127,42 @@ def _per_body_scene(damped=True):
     return bodies, y, effects, wrenches
 
 
-@pytest.mark.parametrize('name, staged', [
-    ('rk4', runge_kutta.body_axes_runge_kutta),
-    ('rk4_world', runge_kutta.world_axes_runge_kutta),
-    ('euler', runge_kutta.world_axes_runge_kutta)])
-def test_runge_kutta_a_body_at_a_time_equals_stage_by_stage(name, staged):
+def _both_orders(name, world):
+    """The world's integrator (a body at a time) and one that goes stage by stage."""
+    one_at_a_time = world.integrator
+    staged = REGISTRY[name](world, world.integrator.tolerance, per_body=False)
+    return one_at_a_time, staged
+
+
+def _advance_both(name, world, state, dt, substeps):
+    """Codes, end states and error estimates of both loop orders from ``state``."""
+    results = []
+    for integrator in _both_orders(name, world):
+        y = state.copy()
+        code = integrator.advance(y, 0.0, dt, substeps, world.effect_parameters())
+        results.append((code, y, integrator.error.copy(), integrator.largest_error))
+    return results
+
+
+@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'euler'])
+def test_runge_kutta_a_body_at_a_time_equals_stage_by_stage(name):
     """Gravity, damping and held wrenches act per body: the World steps a body at a time.
 
-    Three substeps of that give the very bits the stage-by-stage kernel (the one springs
-    need) gives from the same state.
+    Three substeps of that give the very bits, error estimates included, that the
+    stage-by-stage kernel (the one springs need) gives from the same state.
     """
     bodies, y, effects, wrenches = _per_body_scene()
     world = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     assert acts_per_body(world.effect_parameters())
     assert world.integrator._kernel._dispatcher in (
         runge_kutta.body_axes_runge_kutta_per_body, runge_kutta.world_axes_runge_kutta_per_body)
-    dt, substeps = 0.05, 3
-    assert world.integrator.advance(world.y, 0.0, dt, substeps) == 0
-    expected = y.copy()
-    work = (np.empty((COUNT, 13)), np.empty((COUNT, 13)), np.empty((COUNT, 3)),
-            np.empty((COUNT, 3)), np.empty((COUNT, 3)))
-    a, b, c = world.integrator.tableau.chained()
-    assert staged(expected, work, bodies.model, world.effect_parameters(), 0.0,
-                  dt / substeps, substeps, a, b, c) == 0
-    np.testing.assert_array_equal(world.y, expected)
-    assert not np.array_equal(world.y, y)
+    (code, got, error, largest), (staged_code, expected, staged_error, staged_largest) = \
+        _advance_both(name, world, y, 0.05, 3)
+    assert code == staged_code == 0
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(error, staged_error)
+    assert largest == staged_largest == error.max() > 0.0
+    assert not np.array_equal(got, y)
 
 
 def test_runge_kutta_a_body_at_a_time_reports_the_first_bad_substep():
@@ -164,45 +176,31 @@ def test_runge_kutta_a_body_at_a_time_reports_the_first_bad_substep():
     world = World(bodies, y, effects, 'rk4', auto_substep=False, inputs=wrenches)
     state = world.y.copy()
     state[3, 10:13] = 1e154
-    expected = state.copy()
-    code = world.integrator.advance(state, 0.0, 0.1, 4)
-    work = (np.empty((COUNT, 13)), np.empty((COUNT, 13)), np.empty((COUNT, 3)),
-            np.empty((COUNT, 3)), np.empty((COUNT, 3)))
-    a, b, c = world.integrator.tableau.chained()
-    assert code == runge_kutta.body_axes_runge_kutta(
-        expected, work, bodies.model, world.effect_parameters(), 0.0, 0.025, 4, a, b, c)
-    assert code == 1
+    (code, *_), (staged_code, *_) = _advance_both('rk4', world, state, 0.1, 4)
+    assert code == staged_code == 1
 
 
 @pytest.mark.parametrize('damped', [False, True])
-@pytest.mark.parametrize('name, staged', [
-    ('exact_split', splitting.exact_flow_splitting),
-    ('exact_split4', splitting.exact_flow_splitting),
-    ('dlm', splitting.dlm_splitting),
-    ('dlm4', splitting.dlm_splitting)])
-def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, staged, damped):
+@pytest.mark.parametrize('name', ['exact_split', 'exact_split4', 'dlm', 'dlm4'])
+def test_splitting_a_body_at_a_time_equals_kick_by_kick(name, damped):
     """Per-body effects: each body goes through its kicks and drifts in registers.
 
-    Three substeps of that give the very bits the kernel that kicks and drifts all bodies in
-    turn (the one springs need) gives from the same state, with one evaluation a kick or,
-    damped, the Runge-Kutta kick of the method's order.
+    Three substeps of that give the very bits, error estimates included, that the kernel that
+    kicks and drifts all bodies in turn (the one springs need) gives from the same state,
+    with one evaluation a kick or, damped, the Runge-Kutta kick of the method's order.
     """
     bodies, y, effects, wrenches = _per_body_scene(damped=damped)
     world = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     assert world.integrator._kernel._dispatcher in (
         splitting.exact_flow_splitting_per_body, splitting.dlm_splitting_per_body)
-    dt, substeps = 0.05, 3
-    assert world.integrator.advance(world.y, 0.0, dt, substeps) == 0
-    expected = y.copy()
-    a, b, _ = world.integrator.kick_tableau.arrays()
-    work = (np.empty((COUNT, 6)), np.empty((b.size, COUNT, 6)), np.empty((COUNT, 3)),
-            np.empty((COUNT, 3)))
-    weights = np.array(world.integrator.weights)
     assert world.velocity_dependent == damped
-    assert staged(expected, work, bodies.model, world.effect_parameters(), 0.0,
-                  dt / substeps, substeps, weights, damped, a, b) == 0
-    np.testing.assert_array_equal(world.y, expected)
-    assert not np.array_equal(world.y, y)
+    (code, got, error, largest), (staged_code, expected, staged_error, staged_largest) = \
+        _advance_both(name, world, y, 0.05, 3)
+    assert code == staged_code == 0
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(error, staged_error)
+    assert largest == staged_largest == error.max() > 0.0
+    assert not np.array_equal(got, y)
 
 
 @pytest.mark.parametrize('bad, code', [
@@ -222,12 +220,5 @@ def test_splitting_a_body_at_a_time_reports_the_first_bad_substep(bad, code):
     state = world.y.copy()
     for body, (position, momentum) in bad.items():
         state[body, 0], state[body, 7] = position, momentum
-    expected = state.copy()
-    got = world.integrator.advance(state, 0.0, 0.1, 4)
-    a, b, _ = world.integrator.kick_tableau.arrays()
-    work = (np.empty((COUNT, 6)), np.empty((b.size, COUNT, 6)), np.empty((COUNT, 3)),
-            np.empty((COUNT, 3)))
-    assert got == splitting.exact_flow_splitting(
-        expected, work, bodies.model, world.effect_parameters(), 0.0, 0.025, 4,
-        np.array([1.0]), False, a, b)
-    assert got == code
+    (got, *_), (staged, *_) = _advance_both('exact_split', world, state, 0.1, 4)
+    assert got == staged == code

@@ -73,7 +73,7 @@ class Case:
         # The bare method: the benchmark measures each integrator, not the safeguards.
         effects, inputs = self._effects_and_inputs(bodies)
         return World(bodies, y0, effects, integrator=integrator, tolerance=tolerance,
-                     auto_substep=False, inputs=inputs)
+                     auto_substep=False, inputs=inputs, error_control=False)
 
     def _effects_and_inputs(self, bodies):
         """Build the case's effects and its held wrenches (None: no input)."""

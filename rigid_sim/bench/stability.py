@@ -52,7 +52,8 @@ def world(moments, omega, effects=(), integrator=DEFAULT_INTEGRATOR, auto_subste
     y0 = initial_state(bodies, rows(position, 3), rows(orientation, 4), rows(velocity, 3),
                        rows(omega, 3))
     return World(bodies, y0, [make(bodies) for make in effects], integrator,
-                 auto_substep=auto_substep, inputs=None if inputs is None else inputs(bodies))
+                 auto_substep=auto_substep, inputs=None if inputs is None else inputs(bodies),
+                 error_control=auto_substep)
 
 
 def spring(stiffness, point=(0.0, 0.0, 0.0), anchor=(0.0, 0.0, 0.0)):

@@ -102,7 +102,8 @@ def rigid_sim_time(n, integrator, work, repeats, auto_substep=False):
     def prepare():
         bodies, y = bodies_and_state(n)
         world = World(bodies, y, effects_of(n, 'gravity'), integrator,
-                      auto_substep=auto_substep, inputs=held_wrenches(n))
+                      auto_substep=auto_substep, inputs=held_wrenches(n),
+                      error_control=auto_substep)
         return lambda: [world.step(DT) for _ in range(steps)]
 
     steps = 1

@@ -153,7 +153,8 @@ class Copies:
         done = 0
         while done < steps:
             chunk = min(per_call, steps - done)
-            if self.integrator.advance(y, time + done * dt, chunk * dt, chunk * substeps):
+            if self.integrator.advance(y, time + done * dt, chunk * dt, chunk * substeps,
+                                       self.effect_parameters()):
                 spoiled(y)
             done += chunk
 

@@ -12,9 +12,9 @@ method within its bounds (its ``bound``, a :class:`StepBound` each integrator ca
                  body moves exactly at any step). Checked again at the end of the step, so a
                  wrench that spins a body up within one step is caught and the step redone.
 
-A step whose result holds a non-finite value is thrown away and tried again in twice as many
-substeps, at most :data:`MAX_HALVINGS` times; see :meth:`rigid_sim.core.world.World.step`.
-The bounds are numbers of this module; the integrators name theirs from here.
+The bounds are numbers of this module; the integrators name theirs from here. How a step
+uses the plan (and what it does about a non-finite state or a large error estimate) is
+:mod:`rigid_sim.core.step_control`.
 """
 import math
 from dataclasses import dataclass
@@ -49,8 +49,6 @@ KEEP_MARGIN = 1.5
 # More substeps than this would stall the caller (a node's tick); the step then runs at the
 # cap and the reason says so.
 MAX_SUBSTEPS = 1000
-# A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
-MAX_HALVINGS = 4
 UNIT_QUATERNION_SLACK = kinematics.UNIT_QUATERNION_SLACK
 
 
@@ -73,22 +71,6 @@ STRANG_ACCURACY_ALL = StepBound(STRANG_BOUND, STRANG_BOUND, True, 'accuracy')
 YOSHIDA_ACCURACY_ALL = StepBound(YOSHIDA_BOUND, YOSHIDA_BOUND, True, 'accuracy')
 RK4_STABILITY = StepBound(RK4_BOUND, RK4_BOUND, True, 'stability')
 SYMPLECTIC_EULER_STABILITY = StepBound(SYMPLECTIC_EULER_BOUND, math.inf, False, 'stability')
-
-
-@dataclass
-class StepDiagnostics:
-    """What the safeguards did; the node publishes it on /diagnostics."""
-
-    substeps: int = 1         # equal substeps the last step took
-    why: object = ''          # SplitReason of the last step ('' when it was not split)
-    rejected_steps: int = 0   # attempts thrown away for a non-finite value, since reset
-    failed_steps: int = 0     # steps given up, the state kept as it was, since reset
-    last_failure: str = ''    # what the last rejected attempt or given-up step met
-
-    @property
-    def reason(self):
-        """Why the last step was split, in words ('' when it was not)."""
-        return str(self.why)
 
 
 class SplitReason(NamedTuple):
@@ -117,22 +99,6 @@ class SplitReason(NamedTuple):
         if self.reached:
             words = f'{words} (reached during the step)'
         return words
-
-
-def check_time_step(dt):
-    """``dt`` as a float, or ValueError unless it is finite and positive, s."""
-    dt = float(dt)
-    if not (math.isfinite(dt) and dt > 0.0):
-        raise ValueError(f'time step must be finite and positive, got {dt} s')
-    return dt
-
-
-def failure_message(code, substeps, h):
-    """Describe in words what an integrator's failure ``code`` (see ``Integrator.advance``) met."""
-    where = f'substep {abs(code)}/{substeps} of {h:.3g} s'
-    if code > 0:
-        return f'non-finite state in {where}'
-    return f'orientation lost (quaternion overflowed) in {where}'
 
 
 class StepGuard:

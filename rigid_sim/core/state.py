@@ -30,6 +30,8 @@ class Model(NamedTuple):
     inertia_inv: np.ndarray    # (N, 3, 3) ``I_body^-1``, body axes, 1/(kg m^2)
     moments: np.ndarray        # (N, 3) principal moments, ascending, kg m^2
     principal: np.ndarray      # (N, 4) quaternion (x, y, z, w), principal axes to body axes
+    mass: np.ndarray           # (N,) kg
+    gyration: np.ndarray       # (N,) m, radius of gyration sqrt(trace(I_body) / M): a size
 
 
 @dataclass(frozen=True)
@@ -79,9 +81,12 @@ class RigidBodies:
     def model(self):
         """Return the :class:`Model` (static arrays for the kernels) of these bodies."""
         moments, axes = self.principal_moments
+        mass = np.asarray(self.mass, dtype=float)
+        gyration = np.sqrt(np.trace(self.inertia_body, axis1=1, axis2=2) / mass)
         return Model(np.ascontiguousarray(self.inverse_mass),
                      np.ascontiguousarray(self.inertia_body_inv), np.ascontiguousarray(moments),
-                     np.ascontiguousarray(Rotation.from_matrix(axes).as_quat()))
+                     np.ascontiguousarray(Rotation.from_matrix(axes).as_quat()),
+                     np.ascontiguousarray(mass), np.ascontiguousarray(gyration))
 
     @cached_property
     def inverse_mass(self):

@@ -37,7 +37,7 @@ def warm_up(world, integrator=None, imus=None):
     integrator = make_integrator(integrator.name, world, integrator.tolerance)
     probe = world.y.copy()
     with np.errstate(all='ignore'):
-        integrator.advance(probe, world.time, PROBE_STEP, 1)
+        integrator.advance(probe, world.time, PROBE_STEP, 1, world.effect_parameters())
     snapshot = world.snapshot()
     kinematics.largest_spin(world.y, world.bodies.model.inertia_inv, world.torqued,
                             world.inputs.held_mask, True)

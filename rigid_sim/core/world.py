@@ -5,9 +5,11 @@
 As a compiled engine separates model, data and inputs, the World keeps apart what never
 changes while stepping (``bodies.model`` and the effects' parameter arrays), the state
 ``y`` (N, 13) that every step replaces, and the inputs (``inputs``: held wrenches, with their
-hold ends). The integrator's kernel is compiled for exactly the listed effects.
+hold ends). The integrator's kernel is compiled for exactly the listed effects. A step is a
+recipe: expire the inputs, let the step controller (:mod:`rigid_sim.core.step_control`)
+advance the state, record the time.
 """
-import sys
+import math
 
 import numpy as np
 
@@ -16,6 +18,7 @@ from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.state import STATE_WIDTH, Snapshot
+from rigid_sim.core.step_control import StepController
 
 
 class World:
@@ -32,17 +35,20 @@ class World:
     integrator : str
         A registered integrator name.
     tolerance : float
-        Error target of adaptive integrators (relative, per component of the scaled state).
+        The largest local error estimate a step may keep (relative, of the scaled state:
+        :mod:`rigid_sim.core.error_estimate`); the target of adaptive integrators too.
     auto_substep : bool
         Split steps that exceed the integrator's bounds (:mod:`rigid_sim.core.safeguards`);
         False runs the bare method, as benchmarks of the methods themselves need. Non-finite
         steps are rejected either way.
     inputs : AppliedWrenches, optional
         The wrenches held on the bodies; by default none of them takes wrench input.
+    error_control : bool
+        Split steps whose error estimate exceeds ``tolerance``; False for fixed-step studies.
     """
 
     def __init__(self, bodies, initial, effects=(), integrator='rk4', tolerance=1e-6,
-                 auto_substep=True, inputs=None):
+                 auto_substep=True, inputs=None, error_control=True):
         self.bodies = bodies
         self.initial = np.array(initial, dtype=float)
         shape = (bodies.count, STATE_WIDTH)
@@ -57,22 +63,45 @@ class World:
             self.torqued |= effect.torqued
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._effect_parameters = tuple(effect.parameters for effect in self.effects)
-        self.integrator = make_integrator(integrator, self, tolerance)
-        self.auto_substep = bool(auto_substep)
-        self._guard = safeguards.StepGuard(bodies, self.effects, self.inputs)
+        self.control = StepController(
+            safeguards.StepGuard(bodies, self.effects, self.inputs),
+            make_integrator(integrator, self, tolerance), tolerance, auto_substep,
+            error_control)
         self._restart()   # keeps wrenches the inputs were given before the world was built
 
     @property
+    def integrator(self):
+        """The integrator steps are made with; may be replaced between steps."""
+        return self.control.integrator
+
+    @integrator.setter
+    def integrator(self, integrator):
+        self.control.integrator = integrator
+
+    @property
+    def auto_substep(self):
+        """Whether steps are split by the integrator's bounds."""
+        return self.control.auto_substep
+
+    @property
+    def diagnostics(self):
+        """What the step controller did (:class:`~rigid_sim.core.step_control.StepDiagnostics`)."""
+        return self.control.diagnostics
+
+    @property
     def y(self):
-        """(N, 13) packed state [x, q, P, L]; a step replaces it, never writes it in place."""
+        """(N, 13) packed state [x, q, P, L]; a step replaces it, never writes it in place.
+
+        Steps alternate between two arrays: the one read here is written again by the step
+        after next, so copy it to keep it longer.
+        """
         return self._y
 
     @y.setter
     def y(self, state):
-        """Replace the state: (N, 13), read fresh by the next step."""
-        self._y = np.ascontiguousarray(state, dtype=float)
-        self._spare = None
-        self._next_plan = None
+        """Replace the state with a copy of ``state`` (N, 13), read fresh by the next step."""
+        self._y = np.array(state, dtype=float, order='C')
+        self._spare = np.empty_like(self._y)
 
     def effect_parameters(self):
         """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
@@ -87,9 +116,9 @@ class World:
         self.inputs.release()
 
     def _restart(self):
-        self.y = self.initial.copy()
+        self.y = self.initial
         self.time = 0.0
-        self.diagnostics = safeguards.StepDiagnostics()
+        self.control.restart()
 
     def wrench(self, snapshot):
         """Net world force and torque about the centre of mass, (N, 3) each, N and N m."""
@@ -106,83 +135,22 @@ class World:
     def step(self, dt):
         """Advance every body by ``dt`` seconds of simulated time, in substeps if needed.
 
-        Returns True, or False when the step was given up: every attempt (down to
-        ``2^MAX_HALVINGS`` times smaller) met a non-finite value, so ``y`` and ``time`` stay
-        at the last good state and ``diagnostics`` says why. Never raises for that, so a
-        node keeps running. Raises ValueError, changing nothing, for a non-finite or
-        non-positive ``dt``.
+        Returns True, or False when the step was given up: every attempt met a non-finite
+        value, so ``y`` and ``time`` stay at the last good state and ``diagnostics`` says
+        why. Never raises for that, so a node keeps running. Raises ValueError, changing
+        nothing, for a non-finite or non-positive ``dt``.
         """
-        dt = safeguards.check_time_step(dt)
+        dt = float(dt)
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f'time step must be finite and positive, got {dt} s')
         self.inputs.expire(self.time)
-        substeps, reason = self._plan_from_here(dt)
-        y = self._attempt(dt, substeps)
-        if y is not None and self.auto_substep:
-            # A wrench may spin a body up within the step: redo it if the end breaks the bound.
-            grown, why = self._plan(y, dt, substeps)
-            if grown > substeps:
-                substeps, reason = grown, why._replace(reached=True)
-                y = self._attempt(dt, substeps)
-            else:   # the plan a step of dt from y will make, unless y or the inputs change
-                self._next_plan = (y, dt, self.inputs.version, self.integrator, grown, why)
-        diagnostics = self.diagnostics
-        diagnostics.substeps, diagnostics.why = substeps, reason
-        if y is None:
-            diagnostics.failed_steps += 1
+        stepped = self.control.step(self._y, self._spare, self.time, dt,
+                                    self.effect_parameters(), self.inputs.version)
+        if stepped is None:
             return False
-        self._spare, self._y = self._y, y
+        self._spare, self._y = self._y, stepped
         self.time += dt
         return True
-
-    def _plan_from_here(self, dt):
-        """Substeps and reason for a step of ``dt`` from the current state.
-
-        The check at the end of the last step planned it already (the dearest part of a
-        one-body step after the kernel) when nothing it read has changed since: the state,
-        ``dt``, the inputs held, the integrator (the node swaps it at runtime), the guard
-        being on and the count kept (this step's current count is the count that check was
-        given).
-        """
-        planned, self._next_plan = self._next_plan, None   # good for one step only
-        if (planned is not None and planned[0] is self._y and planned[1] == dt
-                and planned[2] == self.inputs.version and planned[3] is self.integrator
-                and self.auto_substep):
-            return planned[4], planned[5]
-        return self._plan(self._y, dt, self.diagnostics.substeps)
-
-    def _plan(self, y, dt, current):
-        if not self.auto_substep:
-            return 1, ''
-        return self._guard.plan(self.integrator, y, dt, current)
-
-    def _attempt(self, dt, substeps):
-        """Step by ``dt``, halving the substeps on a non-finite state; None if every try fails."""
-        for halving in range(safeguards.MAX_HALVINGS + 1):
-            pieces = substeps << halving
-            y = self._scratch()
-            y[...] = self._y
-            try:
-                code = self.integrator.advance(y, self.time, dt, pieces)
-                failure = safeguards.failure_message(code, pieces, dt / pieces) if code else ''
-            except ArithmeticError as error:   # dopri5 raises when its step size collapses
-                failure = f'{type(error).__name__}: {error}'
-            if not failure:
-                return y
-            self.diagnostics.rejected_steps += 1
-            self.diagnostics.last_failure = f't = {self.time:.6g} s: {failure}'
-        return None
-
-    def _scratch(self):
-        """Return an (N, 13) array to step into.
-
-        The state the last step replaced, when no one else holds it (a fresh array at large N
-        costs page faults), else a new one.
-        """
-        spare = self._spare
-        # References: this attribute, the local name and getrefcount's own argument.
-        if spare is None or sys.getrefcount(spare) > 3 or spare is self._y:
-            spare = np.empty_like(self._y)
-        self._spare = None
-        return spare
 
     def snapshot(self):
         """Kinematics of the current state."""

@@ -14,14 +14,18 @@ DEFAULT_INTEGRATOR = 'exact_split'
 def registry(*classes):
     """Map each integrator class's ``name`` to it.
 
-    Raises TypeError for a class that declares no step bound (the base class has none): the guard
-    splits steps by it, and a method that forgot it would run unguarded.
+    Raises TypeError for a class that declares no step bound or no estimate order (the base
+    class has neither): the guard splits steps by the one and error control by the other,
+    and a method that forgot either would run unguarded.
     """
     for cls in classes:
         if not isinstance(getattr(cls, 'bound', None), StepBound):
             raise TypeError(f'integrator {cls.__name__} declares no step bound: give it the '
                             'class attribute bound, a safeguards.StepBound '
                             '(safeguards.UNBOUNDED where none applies)')
+        if not isinstance(getattr(cls, 'estimate_order', None), int):
+            raise TypeError(f'integrator {cls.__name__} declares no estimate_order: the power '
+                            'of h, less one, at which its error estimate per step shrinks')
     return {cls.name: cls for cls in classes}
 
 

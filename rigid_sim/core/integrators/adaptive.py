@@ -5,16 +5,72 @@
 The error of each internal step is held below ``tolerance`` relative to a per-component
 scale built from each body's own size, mass and inertia, so a microgram body is held to the
 same relative accuracy as a kilogram one (an absolute tolerance would swamp the first and
-starve the second). The right-hand side is one compiled call.
+starve the second). The right-hand side is one compiled call. The error estimate of every
+internal step (the difference of the embedded fourth-order solution, which scipy's stepper
+computes to control the step) is reported per body in the units of
+:mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
 """
 import numpy as np
 
+from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
+from rigid_sim.core.compiled import kernel
+from rigid_sim.core.effects.base import accumulate
+from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.runge_kutta import (body_momentum_derivative, from_body_axes,
-                                                    to_body_axes)
+from rigid_sim.core.integrators.runge_kutta import (_add_slope, _set_stage, _slope,
+                                                    _to_internal, _to_public)
 from rigid_sim.core.kinematics import check_substep
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
+
+
+@kernel
+def body_momentum_derivative(inner, work, model, effects, time, out):
+    """Compute the time derivative of the body-axes internal state, for an external stepper.
+
+    Parameters
+    ----------
+    inner : (N, 13) float
+        Internal state [x, q, P, L_b]: x and P in the world frame, ``L_b`` in body axes.
+    work : tuple of arrays
+        Scratch: world state (N, 13), momentum (N, 3), force (N, 3), torque (N, 3).
+    model : Model
+        The bodies' static arrays.
+    effects : tuple of NamedTuple
+        The effects' parameters (see ``effects.base.accumulate``).
+    time : float
+        Simulated time, s.
+    out : (N, 13) float
+        Where ``d inner / dt`` is written.
+
+    Returns
+    -------
+    (N, 13) float
+        ``out``.
+    """
+    world, momentum, force, torque = work
+    zero = (0.0, 0.0, 0.0)
+    for i in range(inner.shape[0]):
+        _set_stage(inner, i, 0.0, (zero, (0.0, 0.0, 0.0, 0.0), zero, zero), world, momentum,
+                   True)
+    accumulate(effects, world, time, model, force, torque)
+    for i in range(inner.shape[0]):
+        for k in range(13):
+            out[i, k] = 0.0
+        _add_slope(out, i, 1.0, _slope(world, momentum, model, force, torque, True, i))
+    return out
+
+
+@kernel
+def to_body_axes(y, start):
+    """``start`` (N, 13) = ``y`` with ``L_b = R^T L`` in slots 10:13."""
+    _to_internal(y, start, True)
+
+
+@kernel
+def from_body_axes(start, y):
+    """``y`` (N, 13) = ``start`` with a unit quaternion and world ``L`` from ``L_b``."""
+    kin.copy_columns(y, 0, start, 0, 13)
+    _to_public(y, True)
 
 
 class Dopri5(Integrator):
@@ -28,6 +84,8 @@ class Dopri5(Integrator):
     order = 5
     adaptive = True
     bound = safeguards.UNBOUNDED   # its error control chooses the internal steps
+    estimate_order = 4             # the embedded fourth-order solution's error, h^5
+    evaluations_per_step = 0       # counted as they happen
 
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)
@@ -37,47 +95,28 @@ class Dopri5(Integrator):
         self._stepper = RK45
         self._step_size = None
         bodies = self.bodies
-        self._inertia_scale = np.trace(bodies.inertia_body, axis1=1, axis2=2)  # kg m^2
-        self._length = np.sqrt(self._inertia_scale / bodies.mass)   # radius of gyration, m
         self._work = (np.empty((bodies.count, 13)), np.empty((bodies.count, 3)), self._force,
                       self._torque)
 
-    def _scale(self, z, dt):
-        """Return the per-component size (N, 13) of the body-axes state ``z``.
-
-        Positions scale with each body's radius of gyration, quaternion components with 1,
-        and momenta with their own size or, at rest, with the body moving its own size in
-        one step ``dt`` (s).
-        """
-        momentum = np.linalg.norm(z[:, LINEAR_MOMENTUM], axis=1)
-        angular = np.linalg.norm(z[:, ANGULAR_MOMENTUM], axis=1)
-        # A body at rest still has a natural momentum: moving its own size in one step.
-        scale = np.ones_like(z)
-        scale[:, ANGULAR_MOMENTUM] = np.maximum(angular, self._inertia_scale / dt)[:, None]
-        scale[:, POSITION] = self._length[:, None]
-        scale[:, LINEAR_MOMENTUM] = np.maximum(momentum, self.bodies.mass * self._length
-                                               / dt)[:, None]
-        return scale
-
-    def advance(self, y, time, dt, substeps):
-        """As :meth:`Integrator.advance`; its evaluations are counted as they happen."""
-        return self._advance(y, time, dt / substeps, substeps)
-
-    def _advance(self, y, time, h, substeps):
+    def _advance(self, y, time, h, substeps, effects, continuing):
+        self.error[:] = 0.0
         for k in range(substeps):
             with np.errstate(all='ignore'):   # a non-finite result is handled, not warned
-                self._interval(y, time + k * h, h)
+                self._interval(y, time + k * h, h, effects)
             code = check_substep(y)
             if code != 0:
-                return code * (k + 1)
-        return 0
+                return code * (k + 1), np.inf
+        return 0, self.error.max()
 
-    def _interval(self, y, time, dt):
+    def _interval(self, y, time, dt, effects):
         """``y`` advanced in place by ``dt`` with error-controlled internal steps."""
         z = np.empty_like(y)
         to_body_axes(y, z)
         shape, model = z.shape, self.bodies.model
-        effects, slope_out = self.system.effect_parameters(), np.empty(shape)
+        slope_out = np.empty(shape)
+        # Each body's own sizes (rigid_sim.core.error_estimate): a body at rest still has a
+        # natural momentum, moving its own size in one step dt.
+        scale = state_scales(model, z, dt, np.empty(shape))
 
         def slope(t, flat):
             self.evaluations += 1
@@ -86,7 +125,7 @@ class Dopri5(Integrator):
 
         end = time + dt
         solver = self._stepper(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
-                               atol=self.tolerance * self._scale(z, dt).ravel(),
+                               atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
         self.last_substeps = 0
         while solver.status == 'running':
@@ -94,6 +133,10 @@ class Dopri5(Integrator):
             self.last_substeps += 1
             if solver.status == 'failed':
                 raise FloatingPointError(f'dopri5 failed: {message}')
+            # The embedded pair's difference, as the stepper forms it (K: its stages, E: the
+            # weights of their difference), per body in scaled units.
+            difference = (solver.h_previous * (solver.K.T @ solver.E)).reshape(shape)
+            self.error += np.max(np.abs(difference) / scale, axis=1)
         # The step the error estimate proposes next, not the last one cut short by `end`.
         self._step_size = solver.h_abs
         from_body_axes(np.ascontiguousarray(solver.y.reshape(shape)), y)

@@ -3,19 +3,22 @@
 """The contract every integrator fulfils.
 
 An integrator advances the packed Baraff state ``y`` (N, 13) = [x, q, P, L] of all bodies.
-It is built for a *system* (a :class:`~rigid_sim.core.world.World`), which provides
+It is built for a *system* that provides ``bodies`` (the
+:class:`~rigid_sim.core.state.RigidBodies`), ``effect_parameters()`` (the tuple of the
+parameters of the scene's effects and of its inputs, which
+:func:`rigid_sim.core.effects.base.accumulate` sums in compiled code) and
+``velocity_dependent`` (whether any effect's wrench depends on the momenta). It reads them
+once, to choose its compiled kernel, and keeps no reference to the system: every call of
+:meth:`Integrator.advance` is given the effects' parameters of that moment.
 
-``bodies``
-    the :class:`~rigid_sim.core.state.RigidBodies` (``bodies.model``: the static arrays);
-``effect_parameters()``
-    the tuple of the parameters of the scene's effects and of its inputs, which
-    :func:`rigid_sim.core.effects.base.accumulate` sums in compiled code;
-``velocity_dependent``
-    bool, whether any effect's wrench depends on the momenta.
+Every call also estimates its local error per body (:mod:`rigid_sim.core.error_estimate`)
+into ``error``; ``largest_error`` is their largest. A method whose estimate per step shrinks
+as ``h^(estimate_order + 1)`` declares ``estimate_order``, from which the step controller
+predicts the substeps a tolerance needs.
 
 To write a new method, subclass :class:`Integrator`, set ``name``, ``order``, ``bound``
-(from :mod:`rigid_sim.core.safeguards`) and ``evaluations_per_step``, implement
-``_advance`` with one compiled call, and add the class to the registry in
+(from :mod:`rigid_sim.core.safeguards`), ``estimate_order`` and ``evaluations_per_step``,
+implement ``_advance`` with one compiled call, and add the class to the registry in
 ``integrators/__init__.py``. Quaternions leave every step unit.
 """
 import numpy as np
@@ -30,33 +33,38 @@ class Integrator:
     # bound: the largest step it takes unsplit, a safeguards.StepBound that every method
     # declares for itself (registration refuses one that does not).
     evaluations_per_step = 1       # wrench evaluations of one step
+    # estimate_order: the local error estimate per step shrinks as h^(estimate_order + 1);
+    # declared by every method (registration refuses one that does not).
 
     def __init__(self, system, tolerance=1e-6):
-        self.system = system
         self.bodies = system.bodies
         self.tolerance = float(tolerance)
         self.evaluations = 0     # wrench evaluations since construction
         self.last_substeps = 1   # internal steps the last call took (adaptive methods)
         count = self.bodies.count
+        self.error = np.zeros(count)   # (N,) local error estimate of the last call, per body
+        self.largest_error = 0.0       # its largest
         self._force = np.zeros((count, 3))
         self._torque = np.zeros((count, 3))
 
-    def step(self, y, time, dt):
-        """State (N, 13) ``dt`` seconds after ``y`` (N, 13) at ``time``; ``y`` stays as it is."""
-        state = np.array(y, dtype=float, order='C')
-        self.advance(state, time, dt, 1)
-        return state
-
-    def advance(self, y, time, dt, substeps):
+    def advance(self, y, time, dt, substeps, effects, continuing=False):
         """Advance ``y`` (N, 13, C-contiguous) in place by ``dt`` in ``substeps`` equal steps.
+
+        ``effects`` are the effects' and inputs' parameters to sum. ``continuing`` says that
+        ``y`` is exactly the state the last call of this integrator ended at and that the
+        effects are unchanged since, so what that call computed at its end (the slope a
+        first-same-as-last method starts from) still holds.
 
         Returns 0, or the failure code of the first bad substep ``k`` (1-based): ``k`` for a
         non-finite state, ``-k`` for a quaternion that overflowed before it was normalised
-        (see :func:`rigid_sim.core.safeguards.failure_message`). ``y`` is then garbage.
+        (see :func:`rigid_sim.core.step_control.failure_message`). ``y`` is then garbage.
+        Sets ``error`` and ``largest_error``, the sums over the substeps.
         """
         self.evaluations += self.evaluations_per_step * substeps
-        return self._advance(y, time, dt / substeps, substeps)
+        code, self.largest_error = self._advance(y, time, dt / substeps, substeps, effects,
+                                                 continuing)
+        return code
 
-    def _advance(self, y, time, h, substeps):
-        """One compiled call: ``substeps`` steps of ``h`` in place; the code of ``advance``."""
+    def _advance(self, y, time, h, substeps, effects, continuing):
+        """One compiled call: ``substeps`` steps of ``h`` in place; (code, largest error)."""
         raise NotImplementedError

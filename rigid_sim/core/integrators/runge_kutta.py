@@ -11,6 +11,7 @@ table of docs/accuracy.md, made by ``rigid_sim_bench accuracy``). The public sta
 Baraff's; only the inside of a step changes: in body axes, slots 10:13 of the internal state
 hold ``L_b``.
 """
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,19 +21,28 @@ from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
+from rigid_sim.core.error_estimate import body_scales, scaled_size, store_scales
 from rigid_sim.core.integrators.base import Integrator
 
 
 @dataclass(frozen=True)
 class Tableau:
-    """Butcher tableau of an explicit method: stage ``i`` uses ``a[i]`` of earlier slopes."""
+    """Butcher tableau of an explicit method: stage ``i`` uses ``a[i]`` of earlier slopes.
 
-    a: tuple   # lower-triangular rows, row i has i entries
-    b: tuple   # weights
-    c: tuple   # stage times as fractions of dt
+    Its error estimate is the difference to an embedded method of one order less that also
+    uses the slope at the step's end (first same as last: that slope is the next step's
+    first, so the estimate costs no evaluation): ``h (sum_i e_i k_i + e_end k_end)``, with
+    ``e = b - b_embedded``.
+    """
+
+    a: tuple          # lower-triangular rows, row i has i entries
+    b: tuple          # weights
+    c: tuple          # stage times as fractions of dt
+    e: tuple          # weights of the stages' slopes in the error estimate
+    e_end: float      # weight of the slope at the step's end in it
 
     def arrays(self):
-        """Return ``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays for the compiled kernel."""
+        """Return ``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays (kicks of a splitting)."""
         stages = len(self.b)
         a = np.zeros((stages, stages))
         for stage, row in enumerate(self.a):
@@ -50,13 +60,26 @@ class Tableau:
             raise ValueError('a stage uses a slope other than the one before it')
         return np.concatenate(([0.0], np.diag(a, -1))), b, c
 
+    def method(self):
+        """Return what the kernels read: ``chained()`` with ``e`` (S,) and ``e_end``."""
+        return (*self.chained(), np.array(self.e, dtype=float), float(self.e_end))
 
-FORWARD_EULER = Tableau(a=((),), b=(1.0,), c=(0.0,))
-EXPLICIT_MIDPOINT = Tableau(a=((), (0.5,)), b=(0.0, 1.0), c=(0.0, 0.5))
+
+# Embedded in forward Euler: Heun's trapezoid, (k1 + k_end) / 2. Euler's own local error is
+# h^2/2 y'' = h/2 (k_end - k1) + O(h^3): the estimate is Euler's error itself.
+FORWARD_EULER = Tableau(a=((),), b=(1.0,), c=(0.0,), e=(0.5,), e_end=-0.5)
+# Used only as a splitting's kick, whose error the splitting estimates.
+EXPLICIT_MIDPOINT = Tableau(a=((), (0.5,)), b=(0.0, 1.0), c=(0.0, 0.5), e=(0.0, 0.0),
+                            e_end=0.0)
+# Embedded in RK4: (k1 + 2 k2 + 2 k3 + k_end) / 6, third order (its four order conditions
+# hold with k_end at c = 1 whose row is RK4's weights). The difference h/6 (k4 - k_end) is
+# that method's error: it bounds RK4's, larger by about 1 / (the step in the motion's time
+# scales), the price of an estimate that costs no evaluation.
 CLASSICAL_RK4 = Tableau(
     a=((), (0.5,), (0.0, 0.5), (0.0, 0.0, 1.0)),
     b=(1 / 6, 1 / 3, 1 / 3, 1 / 6),
     c=(0.0, 0.5, 0.5, 1.0),
+    e=(0.0, 0.0, 0.0, 1 / 6), e_end=-1 / 6,
 )
 
 
@@ -146,91 +169,100 @@ def _to_public(y, body_axes):
 
 
 @helper
-def _runge_kutta_step(y, work, model, effects, time, h, a, b, c, body_axes):
-    """One step of ``h`` on ``y`` in place.
+def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal):
+    """One step of ``h`` on ``y`` in place; the estimate's terms of the stages into ``work``.
 
     Every stage uses only the slope of the one before, so no slope is stored: each body's
-    slope goes straight into the sum and into the next stage.
+    slope goes straight into the sum and into the next stage. The first slope is the one
+    ``fsal`` holds (the last step's end, or :func:`_start_slopes`).
     """
-    start, world, momentum, force, torque = work
+    start, world, momentum, force, torque, estimate, _ = work
+    a, b, c, e, _ = method
     _to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
     kin.copy_columns(y, 10, momentum, 0, 3)   # y now sums the step in the internal layout
+    estimate[:, :] = 0.0
     for stage in range(b.size):
-        accumulate(effects, world, time + c[stage] * h, model, force, torque)
+        if stage > 0:
+            accumulate(effects, world, time + c[stage] * h, model, force, torque)
         following = a[stage + 1] * h if stage + 1 < b.size else 0.0
         for i in range(y.shape[0]):
-            slope = _slope(world, momentum, model, force, torque, body_axes, i)
+            slope = (_stored_slope(fsal, i) if stage == 0
+                     else _slope(world, momentum, model, force, torque, body_axes, i))
             _add_slope(y, i, h * b[stage], slope)
+            _add_slope(estimate, i, h * e[stage], slope)
             if stage + 1 < b.size:
                 _set_stage(start, i, following, slope, world, momentum, body_axes)
     _to_public(y, body_axes)
 
 
-@kernel
-def body_momentum_derivative(inner, work, model, effects, time, out):
-    """Compute the time derivative of the body-axes internal state, for an external stepper.
-
-    Parameters
-    ----------
-    inner : (N, 13) float
-        Internal state [x, q, P, L_b]: x and P in the world frame, ``L_b`` in body axes.
-    work : tuple of arrays
-        Scratch: world state (N, 13), momentum (N, 3), force (N, 3), torque (N, 3).
-    model : Model
-        The bodies' static arrays.
-    effects : tuple of NamedTuple
-        The effects' parameters (see ``effects.base.accumulate``).
-    time : float
-        Simulated time, s.
-    out : (N, 13) float
-        Where ``d inner / dt`` is written.
-
-    Returns
-    -------
-    (N, 13) float
-        ``out``.
-    """
-    world, momentum, force, torque = work
-    zero = (0.0, 0.0, 0.0)
-    for i in range(inner.shape[0]):
-        _set_stage(inner, i, 0.0, (zero, (0.0, 0.0, 0.0, 0.0), zero, zero), world, momentum,
-                   True)
+@helper
+def _start_slopes(y, work, model, effects, time, body_axes, fsal):
+    """Every body's slope at the state ``y`` into ``fsal`` (N, 13), internal layout."""
+    start, world, momentum, force, torque, _, _ = work
+    _to_internal(y, start, body_axes)
+    kin.copy_columns(world, 0, y, 0, 13)
+    kin.copy_columns(momentum, 0, start, 10, 3)
     accumulate(effects, world, time, model, force, torque)
-    for i in range(inner.shape[0]):
-        for k in range(13):
-            out[i, k] = 0.0
-        _add_slope(out, i, 1.0, _slope(world, momentum, model, force, torque, True, i))
-    return out
+    for i in range(y.shape[0]):
+        _store_slope(fsal, i, _slope(world, momentum, model, force, torque, body_axes, i))
 
 
-@kernel
-def to_body_axes(y, start):
-    """``start`` (N, 13) = ``y`` with ``L_b = R^T L`` in slots 10:13."""
-    _to_internal(y, start, True)
+@helper
+def _end_slopes(y, work, model, effects, time, weight, body_axes, fsal, error):
+    """Slopes at the end state ``y`` into ``fsal``; their estimate term closes ``error``.
+
+    Body ``i``'s estimate of the step, the terms of ``work``'s estimate plus ``weight``
+    times its end slope, in scaled units, is added to ``error[i]``.
+    """
+    estimate, scales = work[5], work[6]
+    _start_slopes(y, work, model, effects, time, body_axes, fsal)
+    for i in range(y.shape[0]):
+        slope = _stored_slope(fsal, i)
+        _add_slope(estimate, i, weight, slope)
+        dx, dq, dp, dl = _stored_slope(estimate, i)
+        error[i] += scaled_size(dx, dq, dp, dl, kin.vector(scales, i, 0))
 
 
-@kernel
-def from_body_axes(start, y):
-    """``y`` (N, 13) = ``start`` with a unit quaternion and world ``L`` from ``L_b``."""
-    kin.copy_columns(y, 0, start, 0, 13)
-    _to_public(y, True)
+@helper
+def _stored_slope(a, i):
+    """Body ``i``'s slope (dx, dq, dP, dL tuples) from a (N, 13) array."""
+    return kin.vector(a, i, 0), kin.orientation(a, i), kin.vector(a, i, 7), kin.vector(a, i, 10)
+
+
+@helper
+def _store_slope(a, i, slope):
+    """Write body ``i``'s slope (dx, dq, dP, dL tuples) into a (N, 13) array."""
+    kin.store_body(a, i, slope[0], slope[1], slope[2], slope[3])
 
 
 @helper(inline='always')
-def _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, body_axes):
-    """``substeps`` steps of ``h`` of the tableau (a, b, c) on ``y`` in place; failure code."""
+def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, error, fsal,
+                 continuing):
+    """``substeps`` steps of ``h`` of ``method`` on ``y`` in place; (failure code, largest).
+
+    ``method`` is what :meth:`Tableau.method` returns; ``error`` (N,) receives each body's
+    estimate summed over the substeps, ``fsal`` (N, 13) the slopes at the end.
+    """
+    scales = work[6]
+    store_scales(y, model, h * substeps, scales)
+    error[:] = 0.0
+    if not continuing:
+        _start_slopes(y, work, model, effects, time, body_axes, fsal)
     for k in range(substeps):
-        _runge_kutta_step(y, work, model, effects, time + k * h, h, a, b, c, body_axes)
+        _runge_kutta_step(y, work, model, effects, time + k * h, h, method, body_axes, fsal)
         code = kin.check_substep(y)
         if code != 0:
-            return code * (k + 1)
-    return 0
+            return code * (k + 1), math.inf
+        _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], body_axes,
+                    fsal, error)
+    return 0, error.max()
 
 
 @helper(inline='always')
-def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_axes):
+def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axes, error,
+                          fsal, continuing):
     """:func:`_runge_kutta` for effects that each act on one body: a body at a time.
 
     Each body goes through all its substeps and stages in registers, with the arithmetic
@@ -240,71 +272,126 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, body_ax
     and dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
     "A body at a time").
     """
-    first = 0
+    a, b, c, e, e_end = method
+    if not continuing:
+        _start_slopes_per_body(y, model, effects, time, body_axes, fsal)
+    first, largest = 0, 0.0
     for i in range(y.shape[0]):
         x, q, p, big_l = kin.body_state(y, i)
         inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
+        scales = body_scales(model, i, p, big_l, h * substeps)
+        slope = _stored_slope(fsal, i)   # the first slope: the last step's end
+        total = 0.0
         for k in range(substeps):
             angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
             start = (x, q, p, angular)
-            stage_x, stage_q, stage_p, stage_angular, stage_l = x, q, p, angular, big_l
-            for stage in range(b.size):
-                force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l,
-                                            time + k * h + c[stage] * h, model)
-                dx, dq, dp, dl = _derivative(stage_q, stage_p, stage_angular, force, torque,
-                                             inertia_inv, inverse_mass, body_axes)
-                weight = h * b[stage]
-                x, q = kin.plus_scaled(x, weight, dx), kin.plus_scaled4(q, weight, dq)
-                p = kin.plus_scaled(p, weight, dp)
-                angular = kin.plus_scaled(angular, weight, dl)
-                if stage + 1 < b.size:
-                    step = a[stage + 1] * h
-                    stage_x = kin.plus_scaled(start[0], step, dx)
-                    stage_q = kin.plus_scaled4(start[1], step, dq)
-                    stage_p = kin.plus_scaled(start[2], step, dp)
-                    stage_angular = kin.plus_scaled(start[3], step, dl)
+            (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
+                                                       h * e[0])
+            # Stages 1 .. S-1, then the end: one place evaluates the wrench, which numba
+            # inlines (two inlined copies in one function confuse its variable scopes).
+            for stage in range(1, b.size + 1):
+                if stage < b.size:
+                    step = a[stage] * h
+                    stage_x = kin.plus_scaled(start[0], step, slope[0])
+                    stage_q = kin.plus_scaled4(start[1], step, slope[1])
+                    stage_p = kin.plus_scaled(start[2], step, slope[2])
+                    stage_angular = kin.plus_scaled(start[3], step, slope[3])
                     stage_l = (kin.rotate(kin.matrix(stage_q), stage_angular) if body_axes
                                else stage_angular)
-            q = kin.normalize(q)
-            big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
+                    at = time + k * h + c[stage] * h
+                else:   # the end, as the next substep starts from it
+                    q = kin.normalize(q)
+                    big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
+                    stage_x, stage_q, stage_p, stage_l = x, q, p, big_l
+                    stage_angular = (kin.rotate_inverse(kin.matrix(q), big_l) if body_axes
+                                     else big_l)
+                    at = time + (k + 1) * h
+                force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
+                                            model)
+                slope = _derivative(stage_q, stage_p, stage_angular, force, torque,
+                                    inertia_inv, inverse_mass, body_axes)
+                if stage < b.size:
+                    (x, q, p, angular), estimate = _take_slope(
+                        (x, q, p, angular), estimate, slope, h * b[stage], h * e[stage])
+            dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
+            total += scaled_size(dx, dq, dp, dl, scales)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
-                first = kin.earlier_failure(first, code, k + 1)
+                first, total = kin.earlier_failure(first, code, k + 1), math.inf
                 break
         kin.store_body(y, i, x, q, p, big_l)
-    return first
+        _store_slope(fsal, i, slope)
+        error[i] = total
+        largest = max(largest, total)
+    return first, largest
+
+
+@helper
+def _start_slopes_per_body(y, model, effects, time, body_axes, fsal):
+    """:func:`_start_slopes` a body at a time, for effects that each act on one body."""
+    for i in range(y.shape[0]):
+        x, q, p, big_l = kin.body_state(y, i)
+        angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
+        force, torque = body_wrench(effects, i, x, q, p, big_l, time, model)
+        _store_slope(fsal, i, _derivative(q, p, angular, force, torque,
+                                          kin.entries(model.inertia_inv, i),
+                                          model.inverse_mass[i], body_axes))
+
+
+@helper
+def _take_slope(sums, estimate, slope, weight, estimate_weight):
+    """The step's sums and estimate (slope tuples) with ``slope`` added at their weights."""
+    return _plus_slope(sums, weight, slope), _plus_slope(estimate, estimate_weight, slope)
+
+
+_NO_SLOPE = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+
+@helper
+def _plus_slope(u, weight, v):
+    """Slope tuples ``u + weight v``."""
+    return (kin.plus_scaled(u[0], weight, v[0]), kin.plus_scaled4(u[1], weight, v[1]),
+            kin.plus_scaled(u[2], weight, v[2]), kin.plus_scaled(u[3], weight, v[3]))
 
 
 # One kernel per formulation, the flag a constant inside: compiled in, the per-body branch
 # on it disappears, which a runtime flag keeps in every body's loop.
 @kernel
-def body_axes_runge_kutta(y, work, model, effects, time, h, substeps, a, b, c):
+def body_axes_runge_kutta(y, work, model, effects, time, h, substeps, method, error, fsal,
+                          continuing):
     """:func:`_runge_kutta` on body-axes angular momentum."""
-    return _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, True)
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, True, error, fsal,
+                        continuing)
 
 
 @kernel
-def world_axes_runge_kutta(y, work, model, effects, time, h, substeps, a, b, c):
+def world_axes_runge_kutta(y, work, model, effects, time, h, substeps, method, error, fsal,
+                           continuing):
     """:func:`_runge_kutta` on Baraff's world-axes angular momentum."""
-    return _runge_kutta(y, work, model, effects, time, h, substeps, a, b, c, False)
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, False, error,
+                        fsal, continuing)
 
 
 @kernel
-def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, a, b, c):
+def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error,
+                                   fsal, continuing):
     """:func:`_runge_kutta_per_body` on body-axes angular momentum (``work`` unused)."""
-    return _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, True)
+    return _runge_kutta_per_body(y, model, effects, time, h, substeps, method, True, error,
+                                 fsal, continuing)
 
 
 @kernel
-def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, a, b, c):
+def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error,
+                                    fsal, continuing):
     """:func:`_runge_kutta_per_body` on world-axes angular momentum (``work`` unused)."""
-    return _runge_kutta_per_body(y, model, effects, time, h, substeps, a, b, c, False)
+    return _runge_kutta_per_body(y, model, effects, time, h, substeps, method, False, error,
+                                 fsal, continuing)
 
 
 # (body axes, per body) -> kernel
-_KERNELS = {(True, False): body_axes_runge_kutta, (False, False): world_axes_runge_kutta,
-            (True, True): body_axes_runge_kutta_per_body,
-            (False, True): world_axes_runge_kutta_per_body}
+KERNELS = {(True, False): body_axes_runge_kutta, (False, False): world_axes_runge_kutta,
+           (True, True): body_axes_runge_kutta_per_body,
+           (False, True): world_axes_runge_kutta_per_body}
 
 
 class ExplicitRungeKutta(Integrator):
@@ -316,23 +403,25 @@ class ExplicitRungeKutta(Integrator):
     tableau = None
     body_axes = False
 
-    def __init__(self, system, tolerance=1e-6):
+    def __init__(self, system, tolerance=1e-6, per_body=None):
         super().__init__(system, tolerance)
-        self._tableau = self.tableau.chained()
+        self._method = self.tableau.method()
         self.evaluations_per_step = len(self.tableau.b)
         count = self.bodies.count
         # Effects that each act on one body let a body go through all stages in registers:
         # one pass over the state instead of several per stage (all of it, at large N), and
-        # no scratch arrays to pass.
-        per_body = acts_per_body(system.effect_parameters())
-        self._work = () if per_body else (np.empty((count, 13)), np.empty((count, 13)),
-                                          np.empty((count, 3)), self._force, self._torque)
-        self._kernel = CompiledCall(_KERNELS[self.body_axes, per_body])
+        # no scratch arrays to pass. ``per_body`` False forces the other order (tests).
+        if per_body is None:
+            per_body = acts_per_body(system.effect_parameters())
+        self._work = () if per_body else (
+            np.empty((count, 13)), np.empty((count, 13)), np.empty((count, 3)), self._force,
+            self._torque, np.empty((count, 13)), np.empty((count, 3)))
+        self._end_slopes = np.zeros((count, 13))   # first same as last: the next step's first
+        self._kernel = CompiledCall(KERNELS[self.body_axes, per_body])
 
-    def _advance(self, y, time, h, substeps):
-        a, b, c = self._tableau
-        return self._kernel(y, self._work, self.bodies.model, self.system.effect_parameters(),
-                            time, h, substeps, a, b, c)
+    def _advance(self, y, time, h, substeps, effects, continuing):
+        return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,
+                            self._method, self.error, self._end_slopes, continuing)
 
 
 class ExplicitEuler(ExplicitRungeKutta):
@@ -347,6 +436,7 @@ class ExplicitEuler(ExplicitRungeKutta):
     order = 1
     tableau = FORWARD_EULER
     bound = safeguards.UNBOUNDED
+    estimate_order = 1
 
 
 class RK4World(ExplicitRungeKutta):
@@ -361,6 +451,7 @@ class RK4World(ExplicitRungeKutta):
     order = 4
     tableau = CLASSICAL_RK4
     bound = safeguards.RK4_STABILITY
+    estimate_order = 3
 
 
 class RK4(ExplicitRungeKutta):
@@ -375,3 +466,4 @@ class RK4(ExplicitRungeKutta):
     tableau = CLASSICAL_RK4
     body_axes = True
     bound = safeguards.RK4_STABILITY
+    estimate_order = 3

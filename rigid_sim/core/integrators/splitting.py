@@ -19,6 +19,17 @@ A kick holds x and q fixed. When no effect depends on the momenta its force is c
 over the kick, which one evaluation integrates exactly. A damper makes the kick an ODE of
 its own; one explicit step would cut the whole method to first order, so the kick is then
 integrated by an explicit Runge-Kutta method of the splitting's own order.
+
+Error estimate. A Strang step with a drift of ``h`` errs in position by ``h^3/6`` times the
+rate of change of the acceleration (the Stormer-Verlet local error), which the two kicks
+around the drift measure: ``(h^2/6) (F_after - F_before) / M``; likewise the orientation by
+``(h^2/6) I^-1 (tau_after - tau_before)``, an angle. Both are free: the kicks evaluate those
+wrenches anyway. The exact flow adds nothing (a body nothing torques has no error to
+estimate); the DLM drift is compared with the exact flow from the same state, which costs
+that flow's evaluation. In a Yoshida composition the sub-steps' estimates add with their
+signs, as the errors they estimate cancel to leading order. The momenta's error, ``h^3/12``
+times the acceleration's second derivative, is of the same size as the position's (a
+spring: a half of it, in scaled units) and is not estimated.
 """
 import math
 
@@ -29,6 +40,7 @@ from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
+from rigid_sim.core.error_estimate import body_scales, scaled_size, store_scales
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
@@ -77,11 +89,13 @@ def dlm_rotation(moments, momentum, q, h):
 
 @helper(inline='always')
 def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
-    """One body's free motion for ``h``: its new ``x``, ``q`` and world ``L`` (tuples).
+    """One body's free motion for ``h``: its new ``x``, ``q``, world ``L`` and drift error.
 
     Straight-line translation and torque-free rotation. ``principal`` (4-tuple) turns the
     principal axes into the body frame, ``moments`` (3-tuple) are the principal moments.
-    Scalars and tuples only: no array passes, so a call costs no reference counting.
+    The error is the DLM rotation's difference to the exact flow, principal axes (``L`` and
+    ``q`` tuples; zero for the exact flow). Scalars and tuples only: no array passes, so a
+    call costs no reference counting.
     """
     x = (x[0] + p[0] * (h * inverse_mass), x[1] + p[1] * (h * inverse_mass),
          x[2] + p[2] * (h * inverse_mass))
@@ -90,33 +104,89 @@ def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     if not identity:
         q = kin.multiply(q, principal)
     momentum = kin.rotate_inverse(kin.matrix(q), big_l)
+    error_l, error_q = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
     if drift == EXACT_DRIFT:
         momentum, q = free_flow(moments, momentum, q, h)
     else:
+        exact_momentum, exact_q = free_flow(moments, momentum, q, h)
         momentum, q = dlm_rotation(moments, momentum, q, h)
+        error_l = kin.plus_scaled(momentum, -1.0, exact_momentum)
+        error_q = kin.plus_scaled4(q, -1.0, exact_q)
     big_l = kin.rotate(kin.matrix(q), momentum)
     if not identity:
         q = kin.multiply(q, kin.conjugate(principal))
-    return x, q, big_l
+    return x, q, big_l, (error_l, error_q)
+
+
+@helper
+def _kick_error(q, inverse_mass, inertia_inv, h, force, torque, force_before, torque_before):
+    """Position and angle errors (3-tuples) of a drift of ``h`` between two kicks.
+
+    ``force`` and ``torque`` are the wrench of the kick after it, ``*_before`` of the one
+    before; ``q`` the orientation between (4-tuple), ``inertia_inv`` the body's 9-tuple.
+    """
+    c = h * h / 6.0
+    position = (c * inverse_mass * (force[0] - force_before[0]),
+                c * inverse_mass * (force[1] - force_before[1]),
+                c * inverse_mass * (force[2] - force_before[2]))
+    turned = (c * (torque[0] - torque_before[0]), c * (torque[1] - torque_before[1]),
+              c * (torque[2] - torque_before[2]))
+    return position, kin.angular_velocity(kin.matrix(q), inertia_inv, turned)
+
+
+@helper
+def _substep_error(q, position, angle, drift_error, scales):
+    """Scaled size of a substep's error: estimate terms added up over its kicks and drifts.
+
+    ``angle`` (world axes, rad) becomes the quaternion's error ``(angle, 0) q / 2``.
+    """
+    turn = kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0), q)
+    return scaled_size(position, kin.plus_scaled4(turn, 1.0, drift_error[1]), (0.0, 0.0, 0.0),
+                       drift_error[0], scales)
 
 
 @helper(inline='always')
-def _drift(y, model, h, drift):
-    """Free motion for ``h`` of every body, in place."""
+def _drift(y, model, h, drift, estimate):
+    """Free motion for ``h`` of every body, in place; DLM's error added into ``estimate``."""
     for i in range(y.shape[0]):
-        x, q, big_l = _drift_body(kin.vector(y, i, 0), kin.orientation(y, i),
-                                  kin.vector(y, i, 7), kin.vector(y, i, 10),
-                                  model.inverse_mass[i], kin.orientation_row(model.principal, i),
-                                  kin.vector(model.moments, i, 0), h, drift)
+        x, q, big_l, error = _drift_body(
+            kin.vector(y, i, 0), kin.orientation(y, i), kin.vector(y, i, 7),
+            kin.vector(y, i, 10), model.inverse_mass[i], kin.orientation_row(model.principal, i),
+            kin.vector(model.moments, i, 0), h, drift)
         kin.store(y, i, 0, x)
         kin.store(y, i, 3, q)
         kin.store(y, i, 10, big_l)
+        drifted = (estimate[i, 6], estimate[i, 7], estimate[i, 8], estimate[i, 9])
+        kin.store(estimate, i, 6, kin.plus_scaled4(drifted, 1.0, error[1]))
+        kin.store(estimate, i, 10, kin.add(kin.vector(estimate, i, 10), error[0]))
+
+
+# Slots of a substep's estimate terms, per body, in the kernel that kicks and drifts all
+# bodies in turn: position (0:3) and angle (3:6) from the kicks, the DLM drift's quaternion
+# (6:10) and angular momentum (10:13).
+@helper
+def _add_kick_error(y, model, estimate, h, force, torque, before):
+    """Add every body's :func:`_kick_error` of a drift of ``h`` into ``estimate``.
+
+    ``force`` and ``torque`` (N, 3) are the kick's first wrench after it; ``before`` (N, 6)
+    the one before it, which they then replace.
+    """
+    for i in range(y.shape[0]):
+        f, t = kin.vector(force, i, 0), kin.vector(torque, i, 0)
+        if h != 0.0:
+            position, angle = _kick_error(kin.orientation(y, i), model.inverse_mass[i],
+                                          kin.entries(model.inertia_inv, i), h, f, t,
+                                          kin.vector(before, i, 0), kin.vector(before, i, 3))
+            kin.store(estimate, i, 0, kin.add(kin.vector(estimate, i, 0), position))
+            kin.store(estimate, i, 3, kin.add(kin.vector(estimate, i, 3), angle))
+        kin.store(before, i, 0, f)
+        kin.store(before, i, 3, t)
 
 
 @helper
 def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
     """Momenta after ``h`` of the wrench at fixed x and q, in place."""
-    start, slopes, force, torque = work
+    start, slopes, force, torque = work[0], work[1], work[2], work[3]
     if not velocity_dependent:
         accumulate(effects, y, time, model, force, torque)
         for i in range(y.shape[0]):
@@ -149,53 +219,77 @@ def _kick(y, work, model, effects, time, h, velocity_dependent, a, b):
 
 @helper(inline='always')
 def _strang_composition(y, work, model, effects, time, h, substeps, weights, velocity_dependent,
-                        a, b, drift):
-    """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place; failure code.
+                        a, b, drift, error):
+    """``substeps`` composed kick-drift-kick steps of ``h`` on ``y`` in place.
 
     Within one substep, the half kicks that end one Strang step of the composition and start
     the next act at the same state and time, so they merge: a substep of k Strang steps (k
-    weights) costs k + 1 kicks. Consecutive substeps each keep their own end kicks.
+    weights) costs k + 1 kicks. Consecutive substeps each keep their own end kicks. Returns
+    the failure code and the largest of the estimates it writes into ``error`` (N,).
     """
+    start, slopes, force, torque, before, estimate, scales = work
+    store_scales(y, model, h * substeps, scales)
+    error[:] = 0.0
+    # A kick's first wrench, at the momenta before it: the one the estimate compares.
+    first_force = slopes[0, :, 0:3] if velocity_dependent else force
+    first_torque = slopes[0, :, 3:6] if velocity_dependent else torque
     for k in range(substeps):
+        estimate[:, :] = 0.0
         t = time + k * h
         kick = 0.5 * weights[0]
-        for j in range(weights.size):
+        for j in range(weights.size + 1):
             _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
-            _drift(y, model, weights[j] * h, drift)
+            _add_kick_error(y, model, estimate, weights[j - 1] * h if j > 0 else 0.0,
+                            first_force, first_torque, before)
+            if j == weights.size:
+                break
+            _drift(y, model, weights[j] * h, drift, estimate)
             t += weights[j] * h
             following = weights[j + 1] if j + 1 < weights.size else 0.0
             kick = 0.5 * (weights[j] + following)
-        _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
         for i in range(y.shape[0]):
-            kin.store(y, i, 3, kin.normalize(kin.orientation(y, i)))
+            q = kin.normalize(kin.orientation(y, i))
+            kin.store(y, i, 3, q)
+            error[i] += _substep_error(
+                q, kin.vector(estimate, i, 0), kin.vector(estimate, i, 3),
+                (kin.vector(estimate, i, 10),
+                 (estimate[i, 6], estimate[i, 7], estimate[i, 8], estimate[i, 9])),
+                kin.vector(scales, i, 0))
         code = kin.check_substep(y)
         if code != 0:
-            return code * (k + 1)
-    return 0
+            return code * (k + 1), math.inf
+    return 0, error.max()
 
 
 @helper(inline='always')
-def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift):
+def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift, error):
     """:func:`_strang_composition` for effects that each act on one body.
 
     Each body goes through all its substeps, kicks and drifts in registers, with the
-    arithmetic :func:`_strang_composition` does for it, so the two agree to the last bit.
-    A kick is the Runge-Kutta method whose stages each use only the slope before (``a`` its
-    subdiagonal, ``b`` its weights): one stage of weight 1 when no effect depends on the
-    momenta, which is then the single evaluation of the other kernel. The failure code is
-    that of the earliest bad substep over the bodies (the first such body's sign), as there.
-    A kick called per body with arrays took and dropped references to every array of
-    ``model`` and ``effects``, so the wrench is inlined here (docs/performance.md, "A body at
-    a time").
+    arithmetic :func:`_strang_composition` does for it, so the two agree to the last bit,
+    estimates included. A kick is the Runge-Kutta method whose stages each use only the
+    slope before (``a`` its subdiagonal, ``b`` its weights): one stage of weight 1 when no
+    effect depends on the momenta, which is then the single evaluation of the other kernel.
+    The failure code is that of the earliest bad substep over the bodies (the first such
+    body's sign), as there. A kick called per body with arrays took and dropped references
+    to every array of ``model`` and ``effects``, so the wrench is inlined here
+    (docs/performance.md, "A body at a time").
     """
-    first = 0
+    first, largest = 0, 0.0
+    zero = (0.0, 0.0, 0.0)
     for i in range(y.shape[0]):
         x, q, p, big_l = kin.body_state(y, i)
         inverse_mass = model.inverse_mass[i]
+        inertia_inv = kin.entries(model.inertia_inv, i)
         principal = kin.orientation_row(model.principal, i)
         moments = kin.vector(model.moments, i, 0)
+        scales = body_scales(model, i, p, big_l, h * substeps)
+        total = 0.0
         for k in range(substeps):
             t = time + k * h
+            position, angle = zero, zero
+            drift_error = (zero, (0.0, 0.0, 0.0, 0.0))
+            force_before, torque_before = zero, zero
             # Kick j is by the mean of the fractions before and after it (none: 0).
             for j in range(weights.size + 1):
                 before = weights[j - 1] if j > 0 else 0.0
@@ -205,59 +299,72 @@ def _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, drift)
                 start_p, start_l = p, big_l
                 for stage in range(b.size):   # at fixed x, q and t
                     force, torque = body_wrench(effects, i, x, q, stage_p, stage_l, t, model)
+                    if stage == 0:
+                        if j > 0:
+                            dx, dangle = _kick_error(q, inverse_mass, inertia_inv, before * h,
+                                                     force, torque, force_before, torque_before)
+                            position, angle = kin.add(position, dx), kin.add(angle, dangle)
+                        force_before, torque_before = force, torque
                     p = kin.plus_scaled(p, step * b[stage], force)
                     big_l = kin.plus_scaled(big_l, step * b[stage], torque)
                     if stage + 1 < b.size:
                         stage_p = kin.plus_scaled(start_p, step * a[stage + 1], force)
                         stage_l = kin.plus_scaled(start_l, step * a[stage + 1], torque)
                 if j < weights.size:
-                    x, q, big_l = _drift_body(x, q, p, big_l, inverse_mass, principal,
-                                              moments, weights[j] * h, drift)
+                    x, q, big_l, error_lq = _drift_body(x, q, p, big_l, inverse_mass, principal,
+                                                        moments, weights[j] * h, drift)
+                    drift_error = (kin.add(drift_error[0], error_lq[0]),
+                                   kin.plus_scaled4(drift_error[1], 1.0, error_lq[1]))
                     t += weights[j] * h
             q = kin.normalize(q)
+            total += _substep_error(q, position, angle, drift_error, scales)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
-                first = kin.earlier_failure(first, code, k + 1)
+                first, total = kin.earlier_failure(first, code, k + 1), math.inf
                 break
         kin.store_body(y, i, x, q, p, big_l)
-    return first
+        error[i] = total
+        largest = max(largest, total)
+    return first, largest
 
 
 # One kernel per drift, the choice a constant inside, so the per-body branch compiles away.
 @kernel
 def exact_flow_splitting(y, work, model, effects, time, h, substeps, weights,
-                         velocity_dependent, a, b):
+                         velocity_dependent, a, b, error):
     """:func:`_strang_composition` drifting with the exact free flow."""
     return _strang_composition(y, work, model, effects, time, h, substeps, weights,
-                               velocity_dependent, a, b, EXACT_DRIFT)
+                               velocity_dependent, a, b, EXACT_DRIFT, error)
 
 
 @kernel
 def dlm_splitting(y, work, model, effects, time, h, substeps, weights, velocity_dependent, a,
-                  b):
+                  b, error):
     """:func:`_strang_composition` drifting with the DLM rotations."""
     return _strang_composition(y, work, model, effects, time, h, substeps, weights,
-                               velocity_dependent, a, b, DLM_DRIFT)
+                               velocity_dependent, a, b, DLM_DRIFT, error)
 
 
 @kernel
 def exact_flow_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
-                                  velocity_dependent, a, b):
+                                  velocity_dependent, a, b, error):
     """:func:`_strang_per_body` with the exact free flow (``work`` unused)."""
-    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, EXACT_DRIFT)
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, EXACT_DRIFT,
+                            error)
 
 
 @kernel
 def dlm_splitting_per_body(y, work, model, effects, time, h, substeps, weights,
-                           velocity_dependent, a, b):
+                           velocity_dependent, a, b, error):
     """:func:`_strang_per_body` drifting with the DLM rotations (``work`` unused)."""
-    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, DLM_DRIFT)
+    return _strang_per_body(y, model, effects, time, h, substeps, weights, a, b, DLM_DRIFT,
+                            error)
 
 
 # (drift, per body) -> kernel
-_KERNELS = {(EXACT_DRIFT, False): exact_flow_splitting, (DLM_DRIFT, False): dlm_splitting,
-            (EXACT_DRIFT, True): exact_flow_splitting_per_body,
-            (DLM_DRIFT, True): dlm_splitting_per_body}
+KERNELS = {(EXACT_DRIFT, False): exact_flow_splitting, (DLM_DRIFT, False): dlm_splitting,
+           (EXACT_DRIFT, True): exact_flow_splitting_per_body,
+           (DLM_DRIFT, True): dlm_splitting_per_body}
 
 
 class StrangSplitting(Integrator):
@@ -268,30 +375,33 @@ class StrangSplitting(Integrator):
     kick_tableau = EXPLICIT_MIDPOINT  # for momentum-dependent kicks, of the method's order
     drift = DLM_DRIFT
 
-    def __init__(self, system, tolerance=1e-6):
+    def __init__(self, system, tolerance=1e-6, per_body=None):
         super().__init__(system, tolerance)
         count = self.bodies.count
         self._weights = np.array(self.weights, dtype=float)
+        self._velocity_dependent = bool(system.velocity_dependent)
         a, b, _ = self.kick_tableau.arrays()
         kicks = len(self.weights) + 1
         self.evaluations_per_step = kicks * (b.size if system.velocity_dependent else 1)
         # Effects that each act on one body let a body go through a whole step in registers:
-        # no passes over the state and no scratch arrays.
-        per_body = acts_per_body(system.effect_parameters())
+        # no passes over the state and no scratch arrays. ``per_body`` False forces the
+        # other order (tests).
+        if per_body is None:
+            per_body = acts_per_body(system.effect_parameters())
         self._kick_tableau = (a, b)
         if per_body:
             chained_a, chained_b, _ = (self.kick_tableau.chained() if system.velocity_dependent
                                        else FORWARD_EULER.chained())
             self._kick_tableau = (chained_a, chained_b)
-        self._work = () if per_body else (np.empty((count, 6)), np.empty((b.size, count, 6)),
-                                          self._force, self._torque)
-        self._kernel = CompiledCall(_KERNELS[self.drift, per_body])
+        self._work = () if per_body else (
+            np.empty((count, 6)), np.empty((b.size, count, 6)), self._force, self._torque,
+            np.zeros((count, 6)), np.empty((count, 13)), np.empty((count, 3)))
+        self._kernel = CompiledCall(KERNELS[self.drift, per_body])
 
-    def _advance(self, y, time, h, substeps):
+    def _advance(self, y, time, h, substeps, effects, continuing):
         a, b = self._kick_tableau
-        return self._kernel(y, self._work, self.bodies.model, self.system.effect_parameters(),
-                            time, h, substeps, self._weights, self.system.velocity_dependent,
-                            a, b)
+        return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,
+                            self._weights, self._velocity_dependent, a, b, self.error)
 
 
 class DLM(StrangSplitting):
@@ -303,6 +413,7 @@ class DLM(StrangSplitting):
 
     name = 'dlm'
     bound = safeguards.STRANG_ACCURACY_ALL
+    estimate_order = 2
 
 
 class DLM4(DLM):
@@ -316,6 +427,7 @@ class DLM4(DLM):
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
     bound = safeguards.YOSHIDA_ACCURACY_ALL
+    estimate_order = 3
 
 
 class ExactSplit(StrangSplitting):
@@ -329,6 +441,7 @@ class ExactSplit(StrangSplitting):
     name = 'exact_split'
     drift = EXACT_DRIFT
     bound = safeguards.STRANG_ACCURACY
+    estimate_order = 2
 
 
 class ExactSplit4(ExactSplit):
@@ -339,3 +452,4 @@ class ExactSplit4(ExactSplit):
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
     bound = safeguards.YOSHIDA_ACCURACY
+    estimate_order = 3

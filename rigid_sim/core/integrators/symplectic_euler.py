@@ -1,42 +1,91 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
 """Semi-implicit (symplectic) Euler: kick the momenta, then drift with the new velocities."""
+import math
+
+import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
+from rigid_sim.core.error_estimate import scaled_size, store_scales
 from rigid_sim.core.integrators.base import Integrator
 
 
 @helper
-def _kick_drift(y, model, force, torque, h):
-    """Momenta kicked by the wrench, then x and q drifted with the new velocities."""
+def _kick_drift(y, model, force, torque, h, before, estimate):
+    """Momenta kicked by the wrench, then x and q drifted with the new velocities.
+
+    The step's local errors that the wrench at its start gives are written into
+    ``estimate`` (N, 6), position and angle: ``h^2/2 F / M`` (the drift moves with the
+    momentum at the step's end, not its mean) and ``h^2/2 I^-1 (tau + omega x L)`` (the
+    rotation uses the angular velocity of the new ``L`` and the old orientation, Euler's
+    equations a mean one). The wrench is kept in ``before`` (N, 6).
+    """
     for i in range(y.shape[0]):
+        q = kin.orientation(y, i)
+        r = kin.matrix(q)
+        inertia_inv = kin.entries(model.inertia_inv, i)
+        f, t, big_l = kin.vector(force, i, 0), kin.vector(torque, i, 0), kin.vector(y, i, 10)
+        half = 0.5 * h * h
+        spin = kin.angular_velocity(r, inertia_inv, big_l)
+        kin.store(estimate, i, 0, kin.plus_scaled((0.0, 0.0, 0.0), half * model.inverse_mass[i],
+                                                  f))
+        kin.store(estimate, i, 3, kin.angular_velocity(
+            r, inertia_inv, kin.plus_scaled((0.0, 0.0, 0.0), half, kin.add(t, kin.cross(
+                spin, big_l)))))
+        kin.store(before, i, 0, f)
+        kin.store(before, i, 3, t)
         for k in range(3):
             y[i, 7 + k] += h * force[i, k]
             y[i, 10 + k] += h * torque[i, k]
-        q = kin.orientation(y, i)
-        r = kin.matrix(q)
-        omega = kin.angular_velocity(r, kin.entries(model.inertia_inv, i),
-                                     kin.vector(y, i, 10))
+        omega = kin.angular_velocity(r, inertia_inv, kin.vector(y, i, 10))
         for k in range(3):
             y[i, k] += y[i, 7 + k] * (h * model.inverse_mass[i])
         turn = kin.exp_map((omega[0] * h, omega[1] * h, omega[2] * h))
         kin.store(y, i, 3, kin.normalize(kin.multiply(turn, q)))
 
 
+@helper
+def _add_errors(y, model, force, torque, h, before, estimate, scales, error):
+    """Close each body's estimate with the momenta's errors ``h/2`` (wrench change), into ``error``.
+
+    ``force`` and ``torque`` hold the wrench at the step's end, ``before`` at its start.
+    """
+    for i in range(y.shape[0]):
+        angle = kin.vector(estimate, i, 3)
+        turn = kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0),
+                            kin.orientation(y, i))
+        dp = kin.plus_scaled(kin.vector(force, i, 0), -1.0, kin.vector(before, i, 0))
+        dl = kin.plus_scaled(kin.vector(torque, i, 0), -1.0, kin.vector(before, i, 3))
+        error[i] += scaled_size(kin.vector(estimate, i, 0), turn,
+                                kin.plus_scaled((0.0, 0.0, 0.0), 0.5 * h, dp),
+                                kin.plus_scaled((0.0, 0.0, 0.0), 0.5 * h, dl),
+                                kin.vector(scales, i, 0))
+
+
 @kernel
-def semi_implicit_euler(y, model, effects, time, h, substeps, force, torque):
-    """``substeps`` steps of ``h`` on ``y`` in place; the failure code of ``advance``."""
+def semi_implicit_euler(y, work, model, effects, time, h, substeps, error, continuing):
+    """``substeps`` steps of ``h`` on ``y`` in place; the failure code and largest estimate.
+
+    The wrench at a step's end is the next step's first (and, when ``continuing``, the one
+    ``work`` holds from the last call), so the estimate's wrench costs no evaluation.
+    """
+    force, torque, before, estimate, scales = work
+    store_scales(y, model, h * substeps, scales)
+    error[:] = 0.0
+    if not continuing:
+        accumulate(effects, y, time, model, force, torque)
     for k in range(substeps):
-        accumulate(effects, y, time + k * h, model, force, torque)
-        _kick_drift(y, model, force, torque, h)
+        _kick_drift(y, model, force, torque, h, before, estimate)
         code = kin.check_substep(y)
         if code != 0:
-            return code * (k + 1)
-    return 0
+            return code * (k + 1), math.inf
+        accumulate(effects, y, time + (k + 1) * h, model, force, torque)
+        _add_errors(y, model, force, torque, h, before, estimate, scales, error)
+    return 0, error.max()
 
 
 class SemiImplicitEuler(Integrator):
@@ -50,11 +99,15 @@ class SemiImplicitEuler(Integrator):
     name = 'semi_implicit_euler'
     order = 1
     bound = safeguards.SYMPLECTIC_EULER_STABILITY
+    estimate_order = 1
 
     def __init__(self, system, tolerance=1e-6):
         super().__init__(system, tolerance)
+        count = self.bodies.count
+        self._work = (self._force, self._torque, np.zeros((count, 6)), np.empty((count, 6)),
+                      np.empty((count, 3)))
         self._kernel = CompiledCall(semi_implicit_euler)
 
-    def _advance(self, y, time, h, substeps):
-        return self._kernel(y, self.bodies.model, self.system.effect_parameters(), time, h,
-                            substeps, self._force, self._torque)
+    def _advance(self, y, time, h, substeps, effects, continuing):
+        return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,
+                            self.error, continuing)

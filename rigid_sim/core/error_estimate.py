@@ -1,0 +1,101 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Local error estimates in one unit: the relative error of a body's scaled state.
+
+Every integrator estimates, inside its compiled kernel, how far each body's state after a
+step is from the exact solution that starts where the step started, and reports it per body
+as the largest over the state's components of ``|error_k| / scale_k``. The scales are a
+body's own sizes, those :class:`~rigid_sim.core.integrators.adaptive.Dopri5` holds its
+tolerance to, so a microgram body is judged as strictly as a kilogram one:
+
+================  ===========================================================================
+position          the radius of gyration, ``sqrt(trace(I_body) / M)``
+quaternion        1
+linear momentum   ``|P|``, or at rest ``M`` times the radius of gyration per step ``dt``
+angular momentum  ``|L|``, or at rest ``trace(I_body) / dt``
+================  ===========================================================================
+
+An estimate of 1e-6 thus means: the body is off by a millionth of its size, of a radian
+(twice the quaternion's error), or of its momentum. How each family estimates is in its
+module; the estimates are checked against the true error in docs/accuracy.md ("Error
+estimates").
+"""
+import math
+
+import numpy as np
+
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper, kernel
+
+
+@helper
+def body_scales(model, i, p, big_l, dt):
+    """Position, linear and angular momentum scales of body ``i`` (see the module's table).
+
+    ``p`` and ``big_l`` are its momenta (3-tuples), ``dt`` (s) the step the body moves in.
+    """
+    length = model.gyration[i]
+    inertia = model.mass[i] * length * length
+    momentum = max(math.sqrt(kin.dot(p, p)), model.mass[i] * length / dt)
+    angular = max(math.sqrt(kin.dot(big_l, big_l)), inertia / dt)
+    return length, momentum, angular
+
+
+@kernel
+def state_scales(model, y, dt, out):
+    """Per-component scales of the state ``y`` (N, 13) for a step ``dt``, into ``out`` (N, 13)."""
+    for i in range(y.shape[0]):
+        length, momentum, angular = body_scales(model, i, kin.vector(y, i, 7),
+                                                kin.vector(y, i, 10), dt)
+        kin.store_body(out, i, (length, length, length), (1.0, 1.0, 1.0, 1.0),
+                       (momentum, momentum, momentum), (angular, angular, angular))
+    return out
+
+
+@helper
+def store_scales(y, model, dt, scales):
+    """Every body's :func:`body_scales` at the state ``y`` for a step ``dt``, into (N, 3)."""
+    for i in range(y.shape[0]):
+        kin.store(scales, i, 0, body_scales(model, i, kin.vector(y, i, 7),
+                                            kin.vector(y, i, 10), dt))
+
+
+@helper
+def _largest(v, scale):
+    """Largest ``|v_k|`` of a tuple divided by ``scale``."""
+    largest = 0.0
+    for k in range(len(v)):
+        largest = max(largest, abs(v[k]))
+    return largest / scale
+
+
+@helper
+def scaled_size(dx, dq, dp, dl, scales):
+    """Largest component of the error (``dx``, ``dq``, ``dp``, ``dl`` tuples) over its scale."""
+    length, momentum, angular = scales
+    return max(max(_largest(dx, length), _largest(dq, 1.0)),
+               max(_largest(dp, momentum), _largest(dl, angular)))
+
+
+@kernel
+def scaled_errors(model, reference, y, dt, out):
+    """Per-body scaled size of ``y - reference`` (both (N, 13)), written into ``out`` (N,).
+
+    The scales are those of ``reference`` with step ``dt`` (s); a quaternion is compared
+    with the sign of the reference's (``q`` and ``-q`` are one rotation).
+    """
+    for i in range(y.shape[0]):
+        x0, q0, p0, l0 = kin.body_state(reference, i)
+        x, q, p, big_l = kin.body_state(y, i)
+        sign = 1.0 if q[0] * q0[0] + q[1] * q0[1] + q[2] * q0[2] + q[3] * q0[3] >= 0 else -1.0
+        out[i] = scaled_size(kin.plus_scaled(x, -1.0, x0), kin.plus_scaled4(q0, -sign, q),
+                             kin.plus_scaled(p, -1.0, p0), kin.plus_scaled(big_l, -1.0, l0),
+                             body_scales(model, i, p0, l0, dt))
+    return out
+
+
+def true_errors(bodies, reference, y, dt):
+    """(N,) scaled error of the state ``y`` against ``reference`` ((N, 13) each), step ``dt``."""
+    return scaled_errors(bodies.model, np.ascontiguousarray(reference, dtype=float),
+                         np.ascontiguousarray(y, dtype=float), float(dt),
+                         np.empty(bodies.count))

@@ -1,0 +1,223 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The step controller: how one step of ``dt`` becomes calls of an integrator.
+
+A step is planned, attempted, checked and recorded, in this module alone:
+
+1. **Plan** the equal substeps: the integrator's bounds (:class:`~safeguards.StepGuard`)
+   and, with error control, the count the last step's error estimate predicts for
+   ``tolerance`` (the estimate per step falls as ``n^-estimate_order`` with ``n`` substeps).
+2. **Attempt**: one integrator call; a non-finite result is thrown away and tried again in
+   twice as many substeps, at most :data:`MAX_HALVINGS` times.
+3. **Check the end**: a wrench may have spun a body beyond the bound within the step, or
+   the error estimate may exceed ``tolerance``; either asks for more substeps and the step
+   is attempted once more with them.
+4. **Record** what was done in :class:`StepDiagnostics`, failures in words.
+
+Error control gives substeps back too: the count follows the estimate down, once it has
+fallen by :data:`~safeguards.KEEP_MARGIN` below the count held, so a need hovering at a whole
+number does not flip it every step.
+"""
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from rigid_sim.core import safeguards
+
+# A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
+MAX_HALVINGS = 4
+# Error control aims at this fraction of the tolerance, so that the estimate of the next step,
+# which the state may have made a little larger, stays below it without a redo.
+ERROR_TARGET = 0.5
+
+
+@dataclass
+class StepDiagnostics:
+    """What the step controller did; the node publishes it on /diagnostics."""
+
+    substeps: int = 1         # equal substeps the last step took
+    why: object = ''          # SplitReason or ErrorReason of the last step ('' when unsplit)
+    rejected_steps: int = 0   # attempts thrown away for a non-finite value, since reset
+    failed_steps: int = 0     # steps given up, the state kept as it was, since reset
+    last_failure: str = ''    # what the last rejected attempt or given-up step met
+    error_estimate: float = 0.0      # largest local error estimate of the last step
+    accumulated_error: float = 0.0   # sum of every step's, since reset
+    redone_steps: int = 0     # steps attempted again with more substeps, since reset
+
+    @property
+    def reason(self):
+        """Why the last step was split, in words ('' when it was not)."""
+        return str(self.why)
+
+
+class ErrorReason(NamedTuple):
+    """Why error control split a step: the numbers, in words only when read (``str``)."""
+
+    estimate: float      # the error estimate that asked for the substeps
+    tolerance: float
+    method: str          # the integrator's name
+    substeps: int        # the count taken
+    capped: bool         # more were needed than safeguards.MAX_SUBSTEPS
+
+    def __str__(self):
+        words = (f'error: estimate {self.estimate:.3g} against tolerance {self.tolerance:.3g} '
+                 f'needs {self.substeps} {self.method} substeps')
+        if self.capped:
+            words = f'{words}; capped at {safeguards.MAX_SUBSTEPS} substeps'
+        return words
+
+
+def failure_message(code, substeps, h):
+    """Describe in words what an integrator's failure ``code`` (see ``Integrator.advance``) met."""
+    where = f'substep {abs(code)}/{substeps} of {h:.3g} s'
+    if code > 0:
+        return f'non-finite state in {where}'
+    return f'orientation lost (quaternion overflowed) in {where}'
+
+
+def _same(key, other):
+    """Whether two keys hold the very same objects (states and integrators) or equal numbers."""
+    return all(a is b or (isinstance(a, (int, float)) and a == b) for a, b in zip(key, other))
+
+
+class StepController:
+    """Plans, attempts, checks and records the steps of one world.
+
+    Parameters
+    ----------
+    guard : safeguards.StepGuard
+        The substeps the integrator's bounds need.
+    integrator : Integrator
+        The method; the node may replace it between steps (``integrator``).
+    tolerance : float
+        The largest error estimate a step may keep, in the units of
+        :mod:`rigid_sim.core.error_estimate`.
+    auto_substep : bool
+        Split steps by the method's bounds; False runs the bare method.
+    error_control : bool
+        Split steps by the error estimate; False keeps the count the bounds give (fixed-step
+        studies). Adaptive methods control their error themselves either way.
+    """
+
+    def __init__(self, guard, integrator, tolerance, auto_substep, error_control):
+        self.guard = guard
+        self.integrator = integrator
+        self.tolerance = float(tolerance)
+        self.auto_substep = bool(auto_substep)
+        self.error_control = bool(error_control)
+        self.diagnostics = StepDiagnostics()
+        self._next_plan = None   # the bound plan the end check made: (key, count, why)
+        self._ended = None       # (state, inputs version, integrator) the last step ended at
+
+    def restart(self):
+        """Forget the past: a state set from outside or a reset."""
+        self.diagnostics = StepDiagnostics()
+        self._next_plan = self._ended = None
+
+    def step(self, y, into, time, dt, effects, version):
+        """Advance ``y`` by ``dt`` into the array ``into``; ``into``, or None if given up.
+
+        ``effects`` are the parameters to sum, ``version`` the inputs' version (a change
+        means the wrenches changed). ``y`` is never written.
+        """
+        continuing = self._ended is not None and _same(self._ended, (y, version,
+                                                                    self.integrator))
+        substeps, why = self._plan(y, dt, version, continuing)
+        if not self._attempt(y, into, time, dt, substeps, effects, continuing):
+            return self._record(None, substeps, why, version)
+        redo = self._check_end(into, dt, substeps, version)
+        if redo is not None:
+            substeps, why = redo
+            self.diagnostics.redone_steps += 1
+            if not self._attempt(y, into, time, dt, substeps, effects, False):
+                return self._record(None, substeps, why, version)
+        return self._record(into, substeps, why, version)
+
+    def _plan(self, y, dt, version, continuing):
+        """Substeps and why for a step of ``dt`` from ``y``: the bounds', or the error's."""
+        substeps, why = self._bound_plan(y, dt, version)
+        wanted = self._error_plan(dt) if continuing else 0
+        if wanted > substeps:
+            capped = wanted > safeguards.MAX_SUBSTEPS
+            substeps = min(wanted, safeguards.MAX_SUBSTEPS)
+            why = ErrorReason(self.diagnostics.error_estimate, self.tolerance,
+                              self.integrator.name, substeps, capped)
+        return substeps, why
+
+    def _bound_plan(self, y, dt, version):
+        """The guard's plan; the end check of the last step made it when nothing changed since.
+
+        It read the state, ``dt``, the inputs held, the integrator and the count kept.
+        """
+        if not self.auto_substep:
+            return 1, ''
+        planned, self._next_plan = self._next_plan, None   # good for one step only
+        if planned is not None and _same(planned[0], (y, dt, version, self.integrator)):
+            return planned[1], planned[2]
+        return self.guard.plan(self.integrator, y, dt, self.diagnostics.substeps)
+
+    def _error_plan(self, dt):
+        """Substeps the last step's estimate predicts for this one (0: no prediction)."""
+        integrator = self.integrator
+        estimate = self.diagnostics.error_estimate
+        if not self.error_control or integrator.adaptive or not 0.0 < estimate < math.inf:
+            return 0
+        held = self.diagnostics.substeps
+        need = held * (estimate / (ERROR_TARGET * self.tolerance)) ** (
+            1.0 / integrator.estimate_order)
+        if need <= held and need * safeguards.KEEP_MARGIN > held:
+            return held   # not far enough below to give substeps back
+        return max(1, math.ceil(need))
+
+    def _attempt(self, y, into, time, dt, substeps, effects, continuing):
+        """Step ``y`` by ``dt`` into ``into``, halving on a non-finite state; False if all fail."""
+        for halving in range(MAX_HALVINGS + 1):
+            pieces = substeps << halving
+            into[...] = y
+            try:
+                code = self.integrator.advance(into, time, dt, pieces, effects,
+                                               continuing and halving == 0)
+                failure = failure_message(code, pieces, dt / pieces) if code else ''
+            except ArithmeticError as error:   # dopri5 raises when its step size collapses
+                failure = f'{type(error).__name__}: {error}'
+            if not failure:
+                return True
+            self.diagnostics.rejected_steps += 1
+            self.diagnostics.last_failure = f't = {time:.6g} s: {failure}'
+        return False
+
+    def _check_end(self, y, dt, substeps, version):
+        """(substeps, why) to redo the step with, or None to keep it.
+
+        A wrench may spin a body up within the step: the end state breaks the bound. The
+        estimate may exceed the tolerance: the count it predicts, aimed below it.
+        """
+        if self.auto_substep:
+            grown, why = self.guard.plan(self.integrator, y, dt, substeps)
+            if grown > substeps:
+                return grown, why._replace(reached=True)
+            # The plan a step of dt from y will make, unless y or the inputs change.
+            self._next_plan = ((y, dt, version, self.integrator), grown, why)
+        estimate = self.integrator.largest_error
+        if (self.error_control and not self.integrator.adaptive
+                and self.tolerance < estimate < math.inf and substeps < safeguards.MAX_SUBSTEPS):
+            need = substeps * (estimate / (ERROR_TARGET * self.tolerance)) ** (
+                1.0 / self.integrator.estimate_order)
+            wanted = min(max(substeps + 1, math.ceil(need)), safeguards.MAX_SUBSTEPS)
+            return wanted, ErrorReason(estimate, self.tolerance, self.integrator.name, wanted,
+                                       need > safeguards.MAX_SUBSTEPS)
+        return None
+
+    def _record(self, y, substeps, why, version):
+        """Write the step into the diagnostics; ``y`` (None: given up) is what the step returns."""
+        diagnostics = self.diagnostics
+        diagnostics.substeps, diagnostics.why = substeps, why
+        if y is None:
+            diagnostics.failed_steps += 1
+            self._ended = self._next_plan = None
+            return None
+        estimate = self.integrator.largest_error
+        diagnostics.error_estimate = estimate
+        diagnostics.accumulated_error += estimate
+        self._ended = (y, version, self.integrator)
+        return y
