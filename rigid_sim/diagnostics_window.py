@@ -21,6 +21,7 @@ class TickStats:
         self.step_total = 0.0   # s of wall time spent applying inputs and integrating
         self.step_max = 0.0     # s, the longest of them
         self.failed_ticks = 0   # ticks cut short by a step the world gave up
+        self.largest_error = 0.0   # the largest local error estimate of the window's steps
         self.sim_start = sim_time
         self.wall_start = time.monotonic()
 
@@ -28,6 +29,10 @@ class TickStats:
         self.ticks += 1
         self.step_total += step_seconds
         self.step_max = max(self.step_max, step_seconds)
+
+    def note_error(self, estimate):
+        """Take a step's local error estimate into the window's largest."""
+        self.largest_error = max(self.largest_error, estimate)
 
     @property
     def step_mean(self):
@@ -55,7 +60,23 @@ def window_values(stats, world, target_real_time_factor):
         'why the last step was split': safeguards.reason,
         'rejected steps': safeguards.rejected_steps,
         'failed steps': safeguards.failed_steps,
-        'last step failure': safeguards.last_failure}
+        'last step failure': safeguards.last_failure,
+        **error_values(stats, world)}
+
+
+def error_values(stats, world):
+    """Key -> value of the integration's error estimates (README: error estimates)."""
+    control = world.control
+    momentum, energy = world.invariant_drift()
+    return {
+        'error estimate: largest local in window': stats.largest_error,
+        'error estimate: accumulated since reset': world.diagnostics.accumulated_error,
+        'error estimate: angular momentum drift of torque-free bodies': (
+            'none (every body torqued)' if np.isnan(momentum) else momentum),
+        'error estimate: energy drift of torque-free bodies': (
+            'none (every body torqued)' if np.isnan(energy) else energy),
+        'error control': (f'on, tolerance {control.tolerance:g}' if control.error_control
+                          else 'off')}
 
 
 def refusal_values(refused, last_refusal, superseded):

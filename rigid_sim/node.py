@@ -43,7 +43,8 @@ def load(settings):
     """
     scene = load_scene(find_scene(settings.scene), **settings.resource_limits)
     check_frames(scene, settings)
-    return scene, build_world(scene, settings.integrator, settings.tolerance)
+    return scene, build_world(scene, settings.integrator, settings.tolerance,
+                              settings.error_control)
 
 
 def warm_up(world, name, logger, integrator=None, imus=None):
@@ -211,7 +212,9 @@ class RigidSimNode(Node):
         """
         step = self.settings.time_step / self.settings.substeps
         for _ in range(self.settings.substeps):
-            if not self.world.step(step):
+            stepped = self.world.step(step)
+            self.health.stats.note_error(self.world.diagnostics.error_estimate)
+            if not stepped:
                 self.health.stats.failed_ticks += 1
                 self.get_logger().error(
                     f'gave up a step at t = {self.world.time:g} s, state kept: '
@@ -275,6 +278,8 @@ class RigidSimNode(Node):
     def apply(self, previous):
         """Act on the change of the settings from ``previous`` to the running ones."""
         settings = self.settings
+        self.world.control.tolerance = settings.tolerance
+        self.world.control.error_control = settings.error_control
         frames = (settings.world_frame, settings.frame_prefix)
         if frames != (previous.world_frame, previous.frame_prefix):
             self.outputs.set_frame(self.scene, *frames)

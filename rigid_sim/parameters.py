@@ -63,7 +63,8 @@ class Settings:
     substeps: int          # integrator steps per tick
     publish_rate: float    # Hz of wall time at which outputs go out
     integrator: str        # a name in rigid_sim.core.integrators.REGISTRY
-    tolerance: float       # error target of adaptive integrators
+    tolerance: float       # largest local error estimate a step keeps; dopri5's target
+    error_control: bool    # split steps whose error estimate exceeds tolerance
     wrench_timeout: float  # s of simulated time a wrench is held; 0 holds until replaced
     world_frame: str       # frame_id of the fixed frame
     publish_clock: bool    # publish /clock
@@ -130,7 +131,12 @@ SPECS = {
                                 'with rate 0, Hz of simulated time',
                          MIN_RATE, MAX_RATE),
     'integrator': Spec(str, f'integration method, one of {sorted(REGISTRY)}'),
-    'tolerance': Spec(float, 'error target of adaptive integrators', MIN_TOLERANCE, 1.0),
+    'tolerance': Spec(float, 'largest local error estimate a step may keep, relative to each '
+                             "body's size and momenta (README: error estimates); dopri5's "
+                             'target', MIN_TOLERANCE, 1.0),
+    'error_control': Spec(bool, 'split steps whose error estimate exceeds tolerance, and give '
+                                'the substeps back when it allows; false: fixed steps, as '
+                                'studies of the methods need'),
     'wrench_timeout': Spec(float, 'seconds of simulated time a wrench is held after its '
                                   'message; 0 holds it until replaced', 0.0, 1.0e9),
     'world_frame': Spec(str, 'frame_id of the fixed frame of all published poses: name '
@@ -244,7 +250,8 @@ def declare(node):
     _check_unknown_overrides(node)
     values = {}
     defaults = {'scene': DEFAULT_SCENE, 'rate': 100.0, 'substeps': 1,
-                'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'wrench_timeout': 0.5,
+                'integrator': DEFAULT_INTEGRATOR, 'tolerance': 1.0e-6, 'error_control': True,
+                'wrench_timeout': 0.5,
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
                 'step_ticks': 1, 'frame_prefix': '',
                 'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS,

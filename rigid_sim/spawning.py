@@ -97,7 +97,8 @@ class SceneEditor:
 
         def work():   # any failure refuses the edit (Edit.outcome), never raises
             new_scene, kept, note = edit.build(scene)
-            world = build_world(new_scene, settings.integrator, settings.tolerance)
+            world = build_world(new_scene, settings.integrator, settings.tolerance,
+                                settings.error_control)
             from rigid_sim.node import warm_up   # the node imports this module
             warm_up(world, settings.integrator, logger, imus=scene_imus(new_scene, world.bodies))
             return scene, new_scene, world, kept, note

@@ -85,6 +85,9 @@ class AppliedWrenches:
         self._body_held = np.zeros(count, dtype=bool)
         # (N,) bool: the bodies holding a wrench now (the step guard reads it every step).
         self.held_mask = np.zeros(count, dtype=bool)
+        # (N,) bool: the bodies that held a wrench since the world last took stock of its
+        # conserved quantities (World.invariant_drift reports the others).
+        self.touched = np.zeros(count, dtype=bool)
         # Bodies that take wrench input: (N,) bool, all by default.
         self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
         # A heap of (expires, order, body, key, wrench): a hold that changes or ends costs
@@ -125,6 +128,7 @@ class AppliedWrenches:
             torque = torque + np.cross(lever, force)
             frame = 'body'
         held = HeldWrench(body, frame, force, torque, lever, float(expires))
+        self.touched[body] = True
         if key in self._by_body.get(body, {}):
             self._take(body, key)
         self._by_body.setdefault(body, {})[key] = held

@@ -361,11 +361,12 @@ EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **setting
                    'springs': Springs}
 
 
-def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
+def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6, error_control=True):
     """Return the :class:`World` of ``scene``, with only the effects the scene lists.
 
-    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``. The world's
-    inputs accept wrenches on the bodies that take wrench input, within the scene's limits.
+    ``integrator`` is a name from ``rigid_sim.core.integrators.REGISTRY``; ``tolerance``
+    and ``error_control`` as :class:`World` takes them. The world's inputs accept wrenches
+    on the bodies that take wrench input, within the scene's limits.
     """
     def stacked(get):
         return np.array([get(body) for body in scene.bodies], dtype=float)
@@ -382,7 +383,8 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6):
                for kind, settings in scene.effects.items()]
     accepts = [body.wrench_input for body in scene.bodies]
     inputs = AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts)
-    return World(bodies, initial, effects, integrator, tolerance, inputs=inputs)
+    return World(bodies, initial, effects, integrator, tolerance, inputs=inputs,
+                 error_control=error_control)
 
 
 def check_world_frame(scene, world_frame):

@@ -15,6 +15,7 @@ import numpy as np
 
 from rigid_sim.core import safeguards
 from rigid_sim.core.effects.base import accumulate
+from rigid_sim.core.error_estimate import rotational_invariants
 from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.state import STATE_WIDTH, Snapshot
@@ -58,9 +59,10 @@ class World:
         self.effects = list(effects)
         self.inputs = (AppliedWrenches(bodies, accepts=np.zeros(bodies.count, dtype=bool))
                        if inputs is None else inputs)
-        self.torqued = self.inputs.torqued.copy()
+        self.torqued_by_effects = np.zeros(bodies.count, dtype=bool)
         for effect in self.effects:
-            self.torqued |= effect.torqued
+            self.torqued_by_effects |= effect.torqued
+        self.torqued = self.inputs.torqued | self.torqued_by_effects
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._effect_parameters = tuple(effect.parameters for effect in self.effects)
         self.control = StepController(
@@ -99,9 +101,35 @@ class World:
 
     @y.setter
     def y(self, state):
-        """Replace the state with a copy of ``state`` (N, 13), read fresh by the next step."""
+        """Replace the state with a copy of ``state`` (N, 13), read fresh by the next step.
+
+        The conserved quantities' drift is counted from here on.
+        """
         self._y = np.array(state, dtype=float, order='C')
         self._spare = np.empty_like(self._y)
+        self._take_stock()
+
+    def _take_stock(self):
+        """Note every body's ``|L|`` and rotational energy, and which hold a wrench now."""
+        self.inputs.touched[:] = self.inputs.held_mask
+        self._invariants = rotational_invariants(self._y, self.bodies.model.inertia_inv,
+                                                 np.empty((self.bodies.count, 2)))
+
+    def invariant_drift(self):
+        """Largest relative drift of ``|L|`` and of rotational energy, bodies nothing torqued.
+
+        Since the start, a reset or a state set from outside, over the bodies that no
+        effect torques and that held no wrench in that time: they keep both exactly, so
+        the drift is the integration's error. NaN for both when there is no such body.
+        """
+        free = ~(self.torqued_by_effects | self.inputs.touched)
+        if not free.any():
+            return math.nan, math.nan
+        now = rotational_invariants(self._y, self.bodies.model.inertia_inv,
+                                    np.empty((self.bodies.count, 2)))[free]
+        start = self._invariants[free]
+        drift = np.abs(now - start) / np.maximum(np.abs(start), np.finfo(float).tiny)
+        return float(drift[:, 0].max()), float(drift[:, 1].max())
 
     def effect_parameters(self):
         """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
@@ -112,8 +140,8 @@ class World:
 
         A held wrench belongs to the run that set it: its hold ends at a time of that run.
         """
-        self._restart()
         self.inputs.release()
+        self._restart()
 
     def _restart(self):
         self.y = self.initial

@@ -14,7 +14,8 @@ subscriptions (the ROS default); best-effort ones may still lose messages.
 ``from rigid_sim.testing import Simulation`` imports rclpy and the node; the package itself
 imports nothing until then, so that pytest loading the plugin stays cheap.
 """
-__all__ = ['BodyProperties', 'BodyState', 'ImuReading', 'Simulation', 'run_ready_callbacks']
+__all__ = ['BodyProperties', 'BodyState', 'ErrorEstimate', 'ImuReading', 'Simulation',
+           'run_ready_callbacks']
 
 
 def __getattr__(name):

@@ -7,7 +7,7 @@ import numpy as np
 
 from rigid_sim import conversions
 
-__all__ = ['BodyProperties', 'BodyState', 'ImuReading']
+__all__ = ['BodyProperties', 'BodyState', 'ErrorEstimate', 'ImuReading']
 
 
 @dataclass(frozen=True)
@@ -28,6 +28,21 @@ class BodyProperties:
     mass: float                   # kg
     inertia: np.ndarray           # (3, 3) kg m^2, about the centre of mass, body axes
     center_of_mass: np.ndarray    # (3,) m, centre of mass in body-frame coordinates
+
+
+@dataclass(frozen=True)
+class ErrorEstimate:
+    """How wrong the integration is, as /diagnostics reports it (README: error estimates).
+
+    Errors are relative, of each body's scaled state: 1e-6 is a millionth of the body's
+    size, of a radian, or of its momentum.
+    """
+
+    last_step: float        # largest local error estimate of the last step, over the bodies
+    accumulated: float      # sum of every step's since the start or a reset
+    momentum_drift: float   # largest relative |L| drift of the bodies nothing torqued; NaN: none
+    energy_drift: float     # the same of their rotational energy
+    time: float             # s of simulated time
 
 
 @dataclass(frozen=True)

@@ -13,10 +13,11 @@ from std_srvs.srv import SetBool, Trigger
 from rigid_sim.core.body_state import with_pose, with_twist
 from rigid_sim.core.goals import Goal
 from rigid_sim.testing.delivery import Late, deliver, run_ready_callbacks, wait_until
-from rigid_sim.testing.readings import BodyProperties, BodyState, ImuReading
+from rigid_sim.testing.readings import BodyProperties, BodyState, ErrorEstimate, ImuReading
 from rigid_sim.testing.stepped_node import SteppedNode
 
-__all__ = ['BodyProperties', 'BodyState', 'ImuReading', 'Simulation', 'run_ready_callbacks']
+__all__ = ['BodyProperties', 'BodyState', 'ErrorEstimate', 'ImuReading', 'Simulation',
+           'run_ready_callbacks']
 CONNECT_TIMEOUT = 10.0   # s of wall time for endpoints in one process to match
 STEP_TIMEOUT = 60.0      # s of wall time one step() may take by default
 CALL_TIMEOUT = 10.0      # s of wall time a service call may take
@@ -122,6 +123,13 @@ class Simulation:
         index, bodies = self._index(body), self.node.world.bodies
         return BodyProperties(float(bodies.mass[index]), bodies.inertia_body[index].copy(),
                               bodies.com_in_body[index].copy())
+
+    def error_estimate(self):
+        """Return the :class:`ErrorEstimate` of the integration now."""
+        world = self.node.world
+        momentum, energy = world.invariant_drift()
+        return ErrorEstimate(world.diagnostics.error_estimate,
+                             world.diagnostics.accumulated_error, momentum, energy, self.time)
 
     def set_state(self, body, pose=None, twist=None):
         """Put ``body`` at ``pose`` and/or give it ``twist`` now; the rest stays as it is.
