@@ -11,7 +11,7 @@ A step is planned, attempted, checked and recorded, in this module alone:
    twice as many substeps, at most :data:`MAX_HALVINGS` times.
 3. **Check the end**: a wrench may have spun a body beyond the bound within the step, or
    the error estimate may exceed ``tolerance``; either asks for more substeps and the step
-   is attempted once more with them.
+   is attempted again with them (at most :data:`MAX_REDOS` times).
 4. **Record** what was done in :class:`StepDiagnostics`, failures in words.
 
 Error control gives substeps back too: the count follows the estimate down, once it has
@@ -26,6 +26,9 @@ from rigid_sim.core import safeguards
 
 # A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
 MAX_HALVINGS = 4
+# A step is redone at most this many times with the counts its end checks ask for; the
+# estimate's prediction is good to a few percent in smooth motion, so one redo is the rule.
+MAX_REDOS = 3
 # Error control aims at this fraction of the tolerance, so that the estimate of the next step,
 # which the state may have made a little larger, stays below it without a redo.
 ERROR_TARGET = 0.5
@@ -125,8 +128,10 @@ class StepController:
         substeps, why = self._plan(y, dt, version, continuing)
         if not self._attempt(y, into, time, dt, substeps, effects, continuing):
             return self._record(None, substeps, why, version)
-        redo = self._check_end(into, dt, substeps, version)
-        if redo is not None:
+        for _ in range(MAX_REDOS):
+            redo = self._check_end(into, dt, substeps, version)
+            if redo is None:
+                break
             substeps, why = redo
             self.diagnostics.redone_steps += 1
             if not self._attempt(y, into, time, dt, substeps, effects, False):

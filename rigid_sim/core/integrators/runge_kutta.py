@@ -32,7 +32,10 @@ class Tableau:
     Its error estimate is the difference to an embedded method of one order less that also
     uses the slope at the step's end (first same as last: that slope is the next step's
     first, so the estimate costs no evaluation): ``h (sum_i e_i k_i + e_end k_end)``, with
-    ``e = b - b_embedded``.
+    ``e = b - b_embedded``. That is the embedded method's error, larger than the method's own
+    by about one over ``z = h rho``, ``rho`` the local rate of the motion, which the first two
+    stages measure (``|k2 - k1| / |Y2 - Y1|``, as Hairer and Wanner's stiffness detection
+    does): a method with ``rate_weight`` reports the difference times ``rate_weight z``.
     """
 
     a: tuple          # lower-triangular rows, row i has i entries
@@ -40,6 +43,7 @@ class Tableau:
     c: tuple          # stage times as fractions of dt
     e: tuple          # weights of the stages' slopes in the error estimate
     e_end: float      # weight of the slope at the step's end in it
+    rate_weight: float = 0.0   # the error over the difference per unit z (0: none)
 
     def arrays(self):
         """Return ``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays (kicks of a splitting)."""
@@ -61,8 +65,9 @@ class Tableau:
         return np.concatenate(([0.0], np.diag(a, -1))), b, c
 
     def method(self):
-        """Return what the kernels read: ``chained()`` with ``e`` (S,) and ``e_end``."""
-        return (*self.chained(), np.array(self.e, dtype=float), float(self.e_end))
+        """Return what the kernels read: ``chained()``, ``e`` (S,), ``e_end``, ``rate_weight``."""
+        return (*self.chained(), np.array(self.e, dtype=float), float(self.e_end),
+                float(self.rate_weight))
 
 
 # Embedded in forward Euler: Heun's trapezoid, (k1 + k_end) / 2. Euler's own local error is
@@ -72,14 +77,13 @@ FORWARD_EULER = Tableau(a=((),), b=(1.0,), c=(0.0,), e=(0.5,), e_end=-0.5)
 EXPLICIT_MIDPOINT = Tableau(a=((), (0.5,)), b=(0.0, 1.0), c=(0.0, 0.5), e=(0.0, 0.0),
                             e_end=0.0)
 # Embedded in RK4: (k1 + 2 k2 + 2 k3 + k_end) / 6, third order (its four order conditions
-# hold with k_end at c = 1 whose row is RK4's weights). The difference h/6 (k4 - k_end) is
-# that method's error: it bounds RK4's, larger by about 1 / (the step in the motion's time
-# scales), the price of an estimate that costs no evaluation.
+# hold with k_end at c = 1 whose row is RK4's weights). On y' = lambda y the difference
+# h/6 (k4 - k_end) is z^4/72 y and RK4's own error z^5/120 y: their ratio is 0.6 z.
 CLASSICAL_RK4 = Tableau(
     a=((), (0.5,), (0.0, 0.5), (0.0, 0.0, 1.0)),
     b=(1 / 6, 1 / 3, 1 / 3, 1 / 6),
     c=(0.0, 0.5, 0.5, 1.0),
-    e=(0.0, 0.0, 0.0, 1 / 6), e_end=-1 / 6,
+    e=(0.0, 0.0, 0.0, 1 / 6), e_end=-1 / 6, rate_weight=72 / 120,
 )
 
 
@@ -176,8 +180,8 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
     slope goes straight into the sum and into the next stage. The first slope is the one
     ``fsal`` holds (the last step's end, or :func:`_start_slopes`).
     """
-    start, world, momentum, force, torque, estimate, _ = work
-    a, b, c, e, _ = method
+    start, world, momentum, force, torque, estimate, scales, rates = work
+    a, b, c, e, _, _ = method
     _to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
@@ -192,6 +196,8 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
                      else _slope(world, momentum, model, force, torque, body_axes, i))
             _add_slope(y, i, h * b[stage], slope)
             _add_slope(estimate, i, h * e[stage], slope)
+            if stage == 1:
+                rates[i] = _step_rate(_stored_slope(fsal, i), slope, a[1])
             if stage + 1 < b.size:
                 _set_stage(start, i, following, slope, world, momentum, body_axes)
     _to_public(y, body_axes)
@@ -200,7 +206,7 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
 @helper
 def _start_slopes(y, work, model, effects, time, body_axes, fsal):
     """Every body's slope at the state ``y`` into ``fsal`` (N, 13), internal layout."""
-    start, world, momentum, force, torque, _, _ = work
+    start, world, momentum, force, torque = work[0], work[1], work[2], work[3], work[4]
     _to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
@@ -210,19 +216,68 @@ def _start_slopes(y, work, model, effects, time, body_axes, fsal):
 
 
 @helper
-def _end_slopes(y, work, model, effects, time, weight, body_axes, fsal, error):
+def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, fsal, error):
     """Slopes at the end state ``y`` into ``fsal``; their estimate term closes ``error``.
 
     Body ``i``'s estimate of the step, the terms of ``work``'s estimate plus ``weight``
-    times its end slope, in scaled units, is added to ``error[i]``.
+    times its end slope, in scaled units (times ``rate_weight`` and its rate, see
+    :class:`Tableau`), is added to ``error[i]``.
     """
-    estimate, scales = work[5], work[6]
+    estimate, scales, rates = work[5], work[6], work[7]
     _start_slopes(y, work, model, effects, time, body_axes, fsal)
     for i in range(y.shape[0]):
         slope = _stored_slope(fsal, i)
         _add_slope(estimate, i, weight, slope)
         dx, dq, dp, dl = _stored_slope(estimate, i)
-        error[i] += scaled_size(dx, dq, dp, dl, kin.vector(scales, i, 0))
+        error[i] += _own_error(scaled_size(dx, dq, dp, dl, kin.vector(scales, i, 0)),
+                               rate_weight, rates[i])
+
+
+@helper
+def _ratio(change, slope):
+    """``|change| / |slope|`` of two tuples (0 when both are 0, inf when only the slope is)."""
+    size, moved = 0.0, 0.0
+    for k in range(len(slope)):
+        size += slope[k] * slope[k]
+        moved += change[k] * change[k]
+    if moved == 0.0:
+        return 0.0
+    return math.sqrt(moved / size) if size > 0.0 else math.inf
+
+
+@helper
+def _pair(coordinate, momentum):
+    """The rate of a coordinate and its momentum from their two ratios (:func:`_step_rate`)."""
+    if coordinate > 0.0 and momentum > 0.0:
+        return math.sqrt(coordinate * momentum)
+    return max(coordinate, momentum)
+
+
+@helper
+def _step_rate(first, second, a21):
+    """``z = h rho`` from a step's first two slopes ``k1``, ``k2`` (slope tuples).
+
+    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h rho``. Taken per pair of a
+    coordinate and its momentum, whose two ratios multiply to ``z^2`` for an oscillator of
+    any amplitude and phase (each alone depends on both): the geometric mean of each pair
+    (the one that changes, when the other keeps still: a world-axes ``L`` without torque),
+    the larger of translation and rotation. Free of units.
+    """
+    change = _plus_slope(second, -1.0, first)
+    rate = max(_pair(_ratio(change[0], first[0]), _ratio(change[2], first[2])),
+               _pair(_ratio(change[1], first[1]), _ratio(change[3], first[3]))) / a21
+    return rate if math.isfinite(rate) else 0.0
+
+
+@helper
+def _own_error(difference, rate_weight, rate):
+    """The method's own error from the embedded difference (:class:`Tableau`).
+
+    Never above the difference: that bounds it, and a rate not measured (0) keeps it.
+    """
+    if rate_weight == 0.0 or rate == 0.0:
+        return difference
+    return difference * min(1.0, rate_weight * rate)
 
 
 @helper
@@ -255,8 +310,8 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, 
         code = kin.check_substep(y)
         if code != 0:
             return code * (k + 1), math.inf
-        _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], body_axes,
-                    fsal, error)
+        _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], method[5],
+                    body_axes, fsal, error)
     return 0, error.max()
 
 
@@ -272,7 +327,7 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
     and dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
     "A body at a time").
     """
-    a, b, c, e, e_end = method
+    a, b, c, e, e_end, rate_weight = method
     if not continuing:
         _start_slopes_per_body(y, model, effects, time, body_axes, fsal)
     first, largest = 0, 0.0
@@ -284,7 +339,7 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
         total = 0.0
         for k in range(substeps):
             angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
-            start = (x, q, p, angular)
+            start, first_slope, rate = (x, q, p, angular), slope, 0.0
             (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
                                                        h * e[0])
             # Stages 1 .. S-1, then the end: one place evaluates the wrench, which numba
@@ -313,8 +368,10 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
                 if stage < b.size:
                     (x, q, p, angular), estimate = _take_slope(
                         (x, q, p, angular), estimate, slope, h * b[stage], h * e[stage])
+                if stage == 1 and stage < b.size:
+                    rate = _step_rate(first_slope, slope, a[1])
             dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
-            total += scaled_size(dx, dq, dp, dl, scales)
+            total += _own_error(scaled_size(dx, dq, dp, dl, scales), rate_weight, rate)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
                 first, total = kin.earlier_failure(first, code, k + 1), math.inf
@@ -415,7 +472,7 @@ class ExplicitRungeKutta(Integrator):
             per_body = acts_per_body(system.effect_parameters())
         self._work = () if per_body else (
             np.empty((count, 13)), np.empty((count, 13)), np.empty((count, 3)), self._force,
-            self._torque, np.empty((count, 13)), np.empty((count, 3)))
+            self._torque, np.empty((count, 13)), np.empty((count, 3)), np.zeros(count))
         self._end_slopes = np.zeros((count, 13))   # first same as last: the next step's first
         self._kernel = CompiledCall(KERNELS[self.body_axes, per_body])
 
