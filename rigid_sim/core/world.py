@@ -52,7 +52,7 @@ class World:
         self.effects = list(effects)
         self.inputs = (AppliedWrenches(bodies, accepts=np.zeros(bodies.count, dtype=bool))
                        if inputs is None else inputs)
-        self.torqued = self.inputs.torqued.copy()
+        self.torqued = self.inputs.accepts_wrench.copy()
         for effect in self.effects:
             self.torqued |= effect.torqued
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
