@@ -4,10 +4,10 @@
 
 The format is the "Scene file" section of the package's interface page, written down once
 as field tables (name -> (checker, default)): below, and each effect's in its own module,
-which :data:`rigid_sim.core.effects.REGISTRY` names by its scene key. Every mistake is refused at load with a
-:class:`SceneError` naming the file, the key and the reason, so a scene either builds exactly
-what it says or nothing at all. Only the effects a scene lists are built: an unlisted effect
-costs nothing while stepping.
+which :data:`rigid_sim.core.effects.REGISTRY` names by its scene key. Every mistake is
+refused at load with a :class:`SceneError` naming the file, the key and the reason, so a
+scene either builds exactly what it says or nothing at all. Only the effects a scene lists
+are built, from the registry: an unlisted effect costs nothing while stepping.
 """
 import dataclasses
 import os
