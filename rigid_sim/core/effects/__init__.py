@@ -16,14 +16,14 @@ An effect is one module here with one subclass of
     :func:`~rigid_sim.core.effects.base.body_kernel_for` when a body's wrench depends only
     on that body's state, else (it couples bodies) with
     :func:`~rigid_sim.core.effects.base.kernel_for`;
-``velocity_dependent`` : bool
-    whether its wrench depends on momenta (dampers): splitting methods then integrate
-    their kicks to full order instead of taking one explicit step;
 
 and on each instance
 
 ``parameters``
     its arrays, an instance of one of its ``parts``;
+``velocity_dependent`` : bool
+    whether its wrench depends on momenta (dampers): splitting methods then integrate
+    their kicks to full order instead of taking one explicit step (False by default);
 ``torqued`` : (N,) bool
     which bodies it may apply a torque to (the rest stay torque-free, which lets
     integrators use the exact free-rotation flow for them);
