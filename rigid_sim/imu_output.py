@@ -42,7 +42,7 @@ class ImuOutputs:
         """Replace the IMUs and publishers by those of ``scene``."""
         for publisher in (p for pair in self._publishers for p in pair if p is not None):
             self._node.destroy_publisher(publisher)
-        self.imus = scene_imus(scene, world.bodies)
+        self.imus = scene_imus(scene, world)
         if self.imus is None:
             self._publishers, self._messages = [], []
             return

@@ -119,7 +119,7 @@ class RigidSimNode(Node):
         self._warn_on_frame_mismatch()
         # Before any topic or service exists: once a client discovers one, the node answers.
         self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger(),
-                                imus=scene_imus(self.scene, self.world.bodies))
+                                imus=scene_imus(self.scene, self.world))
         self.ticks = 0
         self.qos_overrides = QosOverrides(self)
         self.clock = ClockOutput(self.qos_overrides)
@@ -254,7 +254,7 @@ class RigidSimNode(Node):
         if scene_changed:
             scene, world = load(settings)
             warm_up(world, settings.integrator, self.get_logger(),
-                    imus=scene_imus(scene, world.bodies))
+                    imus=scene_imus(scene, world))
             return scene, world
         integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
         warm_up(self.world, settings.integrator, self.get_logger(), integrator)

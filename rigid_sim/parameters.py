@@ -24,9 +24,10 @@ MAX_RATE = 1000.0  # Hz; a 1 kHz timer alone already jitters by 5 % (docs/ros_no
 MIN_RATE = 1e-3
 # s; a ROS stamp counts nanoseconds, so a shorter step would not advance /clock at all.
 MIN_TIME_STEP = 1e-9
-# Integrator steps per tick: a tick's work grows with them, and above this one tick of one
-# body takes longer than the fastest tick period (the World's own splitting is bounded apart).
-MAX_TICK_SUBSTEPS = 1000
+# World steps per tick (the `substeps` parameter): a tick's work grows with them, and above
+# this one tick of one body takes longer than the fastest tick period (the step guard's own
+# splitting of each World step is bounded apart, by safeguards.MAX_SUBSTEPS).
+MAX_STEPS_PER_TICK = 1000
 # Below float64 round-off an adaptive integrator can only shrink its steps forever.
 MIN_TOLERANCE = 1e-12
 # Each subscription and publisher slows every executor round (docs/performance.md): a
@@ -124,7 +125,7 @@ SPECS = {
                              f'1/{UNTIMED_DEFAULT_RATE:g} with rate 0; a later change of rate '
                              'keeps it); time_step x rate is the real-time factor',
                       MIN_TIME_STEP, 10.0),
-    'substeps': Spec(int, 'integrator steps per tick', 1, MAX_TICK_SUBSTEPS),
+    'substeps': Spec(int, 'integrator steps per tick', 1, MAX_STEPS_PER_TICK),
     'publish_rate': Spec(float, 'Hz of wall time at which pose, twist, odometry, PoseArray '
                                 'and markers go out (default rate at start): every '
                                 'round(rate / publish_rate)-th tick, at most once per tick; '

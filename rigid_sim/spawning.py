@@ -100,7 +100,7 @@ class SceneEditor:
             world = build_world(new_scene, settings.integrator, settings.tolerance,
                                 settings.error_control)
             from rigid_sim.node import warm_up   # the node imports this module
-            warm_up(world, settings.integrator, logger, imus=scene_imus(new_scene, world.bodies))
+            warm_up(world, settings.integrator, logger, imus=scene_imus(new_scene, world))
             return scene, new_scene, world, kept, note
 
         edit.preparation = Preparation(settings, work)

@@ -58,7 +58,7 @@ def wrapped(dispatcher):
 
 scene = load_scene(find_scene(sys.argv[1]))
 world = build_world(scene, 'exact_split')
-imus = scene_imus(scene, world.bodies) if sys.argv[2] == 'imus' else None
+imus = scene_imus(scene, world) if sys.argv[2] == 'imus' else None
 report = {}
 for phase in ('warm_up', 'imu_readings'):
     names = Names()

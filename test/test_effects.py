@@ -4,6 +4,7 @@
 import importlib
 import inspect
 import pkgutil
+from typing import NamedTuple
 
 import numpy as np
 import pytest
@@ -12,12 +13,14 @@ from scipy.spatial.transform import Rotation
 import physics_cases as cases
 from physics_cases import TILT
 import rigid_sim.core.effects
+from rigid_sim.core.effects import REGISTRY as EFFECTS, registry
 from rigid_sim.core.inputs import AppliedWrenches, WrenchInputs
 from rigid_sim.core.effects.base import Effect, acts_per_body
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity, GravityParameters
 from rigid_sim.core.effects.springs import SpringSpec, Springs
 from rigid_sim.core.integrators import REGISTRY
+from rigid_sim.core.scene_fields import raw
 from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, POSITION
 
 INERTIA = TILT.as_matrix() @ np.diag([0.03, 0.05, 0.07]) @ TILT.as_matrix().T
@@ -392,3 +395,32 @@ def test_unlisted_effects_cost_nothing(name, monkeypatch):
     assert [type(p) for p in only_gravity.effect_parameters()] == [GravityParameters,
                                                                    WrenchInputs]
     assert only_gravity.integrator.evaluations > 0
+
+
+def test_every_effect_is_registered_under_its_scene_key():
+    """The registry holds every effect class the core ships, each under its own name."""
+    assert set(EFFECTS.values()) == effect_classes()
+    assert all(cls.name == name for name, cls in EFFECTS.items())
+
+
+class Unkernelled(NamedTuple):
+    """Parameters no compiled kernel is registered for."""
+
+    weight: np.ndarray
+
+
+def test_an_effect_without_its_declarations_is_refused_at_registration():
+    """An effect a scene could list but no step could evaluate is not registered.
+
+    It must name its scene key, its fields and its parts, and every part needs a kernel.
+    """
+    unnamed = type('Unnamed', (Effect,), {'parts': (GravityParameters,)})
+    with pytest.raises(TypeError, match='Unnamed must declare'):
+        registry(unnamed)
+    orphan = type('Orphan', (Effect,), {'name': 'orphan', 'scene_fields': raw,
+                                        'parts': (Unkernelled,)})
+    with pytest.raises(TypeError, match='Orphan: no compiled kernel .* Unkernelled'):
+        registry(orphan)
+    declared = type('Declared', (Effect,), {'name': 'declared', 'scene_fields': raw,
+                                            'parts': (GravityParameters,)})
+    assert registry(declared) == {'declared': declared}

@@ -29,7 +29,7 @@ UPPER_BOUNDS = {('top', 'dlm4'), ('spring', 'dopri5'), ('top', 'dopri5')}
 
 
 def oscillator(name, error_control=False, tolerance=1e-6):
-    """A body on a spring of natural frequency OMEGA from its centre of mass to the origin."""
+    """Build a body on a spring of natural frequency OMEGA from its centre to the origin."""
     bodies = RigidBodies(('body',), np.array([MASS]), np.diag([0.3, 0.4, 0.5])[None],
                          np.zeros((1, 3)))
     y = initial_state(bodies, X0[None], np.array([[0.0, 0.0, 0.0, 1.0]]), V0[None],
@@ -41,7 +41,7 @@ def oscillator(name, error_control=False, tolerance=1e-6):
 
 
 def oscillator_exact(y, dt):
-    """The oscillator's state ``dt`` after ``y``: x = x0 cos wt + v0/w sin wt."""
+    """Return the oscillator's state ``dt`` after ``y``: x = x0 cos wt + v0/w sin wt."""
     x, v = y[0, 0:3], y[0, 7:10] / MASS
     exact = y.copy()
     exact[0, 0:3] = x * np.cos(OMEGA * dt) + v / OMEGA * np.sin(OMEGA * dt)
@@ -50,7 +50,7 @@ def oscillator_exact(y, dt):
 
 
 def top(name, error_control=False, tolerance=1e-6):
-    """A torque-free symmetric top spinning mostly about its symmetry axis."""
+    """Build a torque-free symmetric top spinning mostly about its symmetry axis."""
     bodies = RigidBodies(('top',), np.array([1.0]), TOP[None], np.zeros((1, 3)))
     y = initial_state(bodies, np.zeros((1, 3)), TOP_TURN.as_quat()[None], np.zeros((1, 3)),
                       TOP_TURN.apply(TOP_SPIN)[None])
@@ -59,7 +59,7 @@ def top(name, error_control=False, tolerance=1e-6):
 
 
 def top_exact(y, dt):
-    """The top's state ``dt`` after ``y``: R(t) = Rot(L t / A) R0 Rot(e3 mu t).
+    """Return the top's state ``dt`` after ``y``: R(t) = Rot(L t / A) R0 Rot(e3 mu t).
 
     ``A`` is the transverse moment, ``mu = (A - C) omega_3 / A`` the body-frame precession;
     world ``L`` is constant.
@@ -78,7 +78,7 @@ CASES = {'spring': (oscillator, oscillator_exact), 'top': (top, top_exact)}
 
 
 def one_step(case, name, dt, **world_options):
-    """The estimate and the true error of each of five steps of ``dt`` along the case."""
+    """Return the estimate, true error and substeps of five steps of ``dt`` along the case."""
     build, exact = CASES[case]
     world = build(name, **world_options)
     pairs = []
@@ -98,8 +98,8 @@ def test_the_closed_forms_are_the_motion():
     """
     y = oscillator('rk4').y
     later = oscillator_exact(y, 0.37)
-    energy = [0.5 * s[0, 7:10] @ s[0, 7:10] / MASS + 0.5 * MASS * OMEGA ** 2 * s[0, 0:3] @ s[0, 0:3]
-              for s in (y, later)]
+    energy = [0.5 * s[0, 7:10] @ s[0, 7:10] / MASS
+              + 0.5 * MASS * OMEGA ** 2 * s[0, 0:3] @ s[0, 0:3] for s in (y, later)]
     assert energy[1] == pytest.approx(energy[0], rel=1e-12)
     y = top('rk4').y
     later = top_exact(y, 0.37)

@@ -128,7 +128,7 @@ def _per_body_scene(damped=True):
 
 
 def _both_orders(name, world):
-    """The world's integrator (a body at a time) and one that goes stage by stage."""
+    """Return the world's integrator (a body at a time) and one that goes stage by stage."""
     one_at_a_time = world.integrator
     staged = REGISTRY[name](world, world.integrator.tolerance, per_body=False)
     return one_at_a_time, staged

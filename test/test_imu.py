@@ -21,7 +21,7 @@ from sensor_msgs.msg import Imu, MagneticField
 import ros_tools
 
 from rigid_sim import conversions
-from rigid_sim.core.imu import build_imus
+from rigid_sim.core.imu import build_imus, scene_imus
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
 from rigid_sim.inputs import held_wrenches
 
@@ -52,8 +52,7 @@ def read(scene, steps=0, dt=1e-3, hold=None):
         held_wrenches(world).hold(0, 'test', *hold)
     for _ in range(steps):
         assert world.step(dt)
-    imus = build_imus(scene.bodies, world.bodies, scene.effects.get('gravity', {}).get(
-        'acceleration'))
+    imus = scene_imus(scene, world)   # gravity: the world's Gravity effect's
     return world, imus.read(world, imus.due(world.time))
 
 

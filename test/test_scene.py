@@ -149,7 +149,7 @@ def test_wrench_input_mask_reaches_the_effect():
     """A body with wrench_input false is refused a wrench; the others accept one."""
     data = scene_with(lambda d: d['bodies'][1].update(wrench_input=False))
     wrenches = build_world(parse_scene(data)).inputs
-    assert list(wrenches.torqued) == [True, False]
+    assert list(wrenches.accepts_wrench) == [True, False]
     assert wrenches.max_force == 100.0 and wrenches.max_torque == 10.0
 
 

@@ -299,7 +299,7 @@ def test_unlisted_effects_cost_nothing(monkeypatch):
     """
     world = free_world()
     monkeypatch.setattr(rotation, 'to_matrix', lambda q: pytest.fail('rotation computed'))
-    assert world._guard.plan(world.integrator, world.y, 10.0) == (1, '')
+    assert world.control.guard.plan(world.integrator, world.y, 10.0) == (1, '')
 
 
 @pytest.mark.parametrize('dt', [0.0, -0.01, np.nan, np.inf])

@@ -6,7 +6,7 @@ Every registered integrator runs every case of :mod:`rigid_sim.bench.cases` at e
 step or, if adaptive, each tolerance (the whole interval asked of it in one call); the final
 state is scored against the case's exact oracle. A setting whose estimated cost exceeds the
 budget, or finer than one whose error already sits at round-off, is skipped and listed.
-A method's own internal substeps show in its count of wrench (RHS) evaluations.
+A method's own internal steps (``dopri5``'s) show in its count of wrench (RHS) evaluations.
 """
 import dataclasses
 import functools
@@ -73,7 +73,7 @@ def measure_rigid(case, setting, repeats, budget, method):
 def skip_reason(case, previous):
     """Why the next (finer) setting is not run, judged from the previous one, or None.
 
-    Cost is not: a method may substep coarse steps internally, so a finer setting can cost
+    Cost is not: a method may take a coarse step in internal steps, so a finer setting can cost
     less; the first timed run of each setting decides (``bench.OverBudget``).
     """
     if previous is None:

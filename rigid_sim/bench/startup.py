@@ -35,7 +35,7 @@ from rigid_sim.core.warm_up import warm_up_reporting
 from rigid_sim.resources import find_scene
 scene = load_scene(find_scene({scene!r}))
 world = build_world(scene, {integrator!r})
-seconds, compiled = warm_up_reporting(world, imus=scene_imus(scene, world.bodies))
+seconds, compiled = warm_up_reporting(world, imus=scene_imus(scene, world))
 assert world.step(0.01)
 print(seconds, compiled)
 '''

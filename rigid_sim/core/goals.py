@@ -92,7 +92,7 @@ def _check(world, goal):
     if not (np.isfinite(goal.at) and goal.at > world.time):
         raise GoalRefused(f'the goal time {goal.at!r} s is not after the simulated time '
                           f'{world.time!r} s')
-    if goal.unknowns == 'wrench' and not world.inputs.torqued[goal.body]:
+    if goal.unknowns == 'wrench' and not world.inputs.accepts_wrench[goal.body]:
         raise GoalRefused(f'body {world.bodies.names[goal.body]!r} takes no wrench input')
     return position, orientation
 

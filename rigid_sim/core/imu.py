@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core import rotation
+from rigid_sim.core.effects.gravity import gravity_of
 from rigid_sim.core.imu_kinematics import readings
 from rigid_sim.core.imu_noise import NoisySensor
 from rigid_sim.core.imu_spec import ImuSpec, parse_imus
@@ -59,14 +60,14 @@ def build_imus(scene_bodies, bodies, gravity, magnetic_field=None):
                 np.zeros(3) if magnetic_field is None else np.asarray(magnetic_field))
 
 
-def scene_imus(scene, bodies):
-    """Return the :class:`Imus` of ``scene`` on ``bodies`` (its RigidBodies), or None.
+def scene_imus(scene, world):
+    """Return the :class:`Imus` of ``scene`` on ``world`` (the World built from it), or None.
 
-    Their gravity is the scene's (none when it lists no gravity), and so is the magnetic
-    field their magnetometers read.
+    Their gravity is that of the world's Gravity effect (none when the scene lists no
+    gravity); the magnetic field their magnetometers read is the scene's.
     """
-    gravity = scene.effects.get('gravity', {}).get('acceleration')
-    return build_imus(scene.bodies, bodies, gravity, scene.magnetic_field)
+    return build_imus(scene.bodies, world.bodies, gravity_of(world.effects),
+                      scene.magnetic_field)
 
 
 @dataclass(frozen=True)

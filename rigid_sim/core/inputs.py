@@ -89,7 +89,8 @@ class AppliedWrenches:
         # conserved quantities (World.invariant_drift reports the others).
         self.touched = np.zeros(count, dtype=bool)
         # Bodies that take wrench input: (N,) bool, all by default.
-        self.torqued = np.ones(count, dtype=bool) if accepts is None else np.array(accepts, bool)
+        self.accepts_wrench = (np.ones(count, dtype=bool) if accepts is None
+                               else np.array(accepts, bool))
         # A heap of (expires, order, body, key, wrench): a hold that changes or ends costs
         # O(log n), not a walk over all n held wrenches.
         self._expiries = []
@@ -118,7 +119,7 @@ class AppliedWrenches:
         """
         if frame not in FRAMES:
             raise ValueError(f'unknown wrench frame {frame!r}; valid: {FRAMES}')
-        if not self.torqued[body]:
+        if not self.accepts_wrench[body]:
             raise ValueError(f'body {self._bodies.names[body]!r} takes no wrench input')
         force, torque = self.check(force, torque)
         lever = np.zeros(3)

@@ -121,7 +121,7 @@ class StepGuard:
         self._always_torqued = np.zeros(bodies.count, dtype=bool)
         for effect in effects:
             self._always_torqued |= effect.torqued
-        self._may_torque = bool(self._always_torqued.any() or inputs.torqued.any())
+        self._may_torque = bool(self._always_torqued.any() or inputs.accepts_wrench.any())
         self._last_spin = (None, None, 0.0)   # (state, inputs version, their largest |omega|)
         self._largest_spin = CompiledCall(kinematics.largest_spin)
 

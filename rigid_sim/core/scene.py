@@ -3,10 +3,11 @@
 """Scene files: YAML -> a validated :class:`Scene` -> a :class:`~rigid_sim.core.world.World`.
 
 The format is the "Scene file" section of the package's interface page, written down once
-below as field tables (name -> (checker, default)). Every mistake is refused at load with a
-:class:`SceneError` naming the file, the key and the reason, so a scene either builds exactly
-what it says or nothing at all. Only the effects a scene lists are built: an unlisted effect
-costs nothing while stepping.
+as field tables (name -> (checker, default)): below, and each effect's in its own module,
+which :data:`rigid_sim.core.effects.REGISTRY` names by its scene key. Every mistake is
+refused at load with a :class:`SceneError` naming the file, the key and the reason, so a
+scene either builds exactly what it says or nothing at all. Only the effects a scene lists
+are built, from the registry: an unlisted effect costs nothing while stepping.
 """
 import dataclasses
 import os
@@ -14,12 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigid_sim.core import rotation
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
-from rigid_sim.core.effects.damping import Damping
-from rigid_sim.core.effects.gravity import Gravity
-from rigid_sim.core.effects.springs import Springs, SpringSpec
+from rigid_sim.core.effects import REGISTRY as EFFECTS
 from rigid_sim.core.goals import UNKNOWNS, WRENCH_AXES
 from rigid_sim.core.imu_spec import parse_imus
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
@@ -27,7 +25,7 @@ from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.state import RigidBodies, initial_state
 from rigid_sim.core.world import World
 from rigid_sim.core.scene_fields import (
-    ABSENT, choice, count, describe, fields, list_of, matrix, Mistake, non_negative, of_type,
+    ABSENT, choice, count, describe, fields, list_of, matrix, Mistake, of_type,
     points, positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
 from rigid_sim.core.scene_file import FileRefused, load_yaml
 from rigid_sim.core.scene_limits import Budget, operator_limits, raise_note, WORK_LIMITS
@@ -35,8 +33,6 @@ from rigid_sim.core.text import clipped, shown
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
 GOAL_DEFAULT = {'unknowns': 'twist', 'axes': 'world'}
-# Spring ends closer than this fraction of the rest length count as one point.
-COINCIDENT = 1e-9
 
 
 class SceneError(ValueError):
@@ -69,8 +65,10 @@ class BodySpec:
 class Scene:
     """A validated scene: the bodies and only the effects the file lists.
 
-    ``effects`` holds the listed ones only: ``'gravity'``: {acceleration (3,) m/s^2},
-    ``'damping'``: {linear, angular} rates in 1/s, ``'springs'``: tuple of SpringSpec.
+    ``effects`` holds the listed ones only, scene key -> settings as the effect's class
+    (in :data:`rigid_sim.core.effects.REGISTRY`) resolved them: ``'gravity'``:
+    {acceleration (3,) m/s^2}, ``'damping'``: {linear, angular} rates in 1/s,
+    ``'springs'``: tuple of SpringSpec.
     """
 
     path: str
@@ -106,19 +104,13 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
         'imu': (raw, ABSENT),
         'goal': (table({'unknowns': (choice(*UNKNOWNS), GOAL_DEFAULT['unknowns']),
                         'axes': (choice(*WRENCH_AXES), GOAL_DEFAULT['axes'])}), {})}
-SPRING = {'body': (token, REQUIRED), 'stiffness': (non_negative, REQUIRED),
-          'point': (vector, ZERO), 'anchor': (vector, ABSENT), 'other': (token, ABSENT),
-          'other_point': (vector, ABSENT), 'damping': (non_negative, 0.0),
-          'rest_length': (non_negative, 0.0)}
-EFFECTS = {'gravity': (table({'acceleration': (vector, REQUIRED)}), ABSENT),
-           'damping': (table({'linear': (non_negative, 0.0),
-                              'angular': (non_negative, 0.0)}), ABSENT),
-           'springs': (list_of(table(SPRING), 'springs'), ABSENT)}
 SCENE = {'world_frame': (token, 'world'),
          'limits': (table({'max_force': (positive, DEFAULT_MAX_FORCE),
                            'max_torque': (positive, DEFAULT_MAX_TORQUE),
                            **{name: (count, ABSENT) for name in WORK_LIMITS}}), {}),
-         'effects': (table(EFFECTS), {}),
+         # Each effect's own fields (rigid_sim.core.effects.REGISTRY), in its order.
+         'effects': (table({name: (effect.scene_fields, ABSENT)
+                            for name, effect in EFFECTS.items()}), {}),
          'magnetic_field': (vector, ABSENT),   # read by magnetometers only, T
          # Raw here; parse_body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
@@ -266,43 +258,15 @@ def world_frame_clash(bodies, world_frame):
     return None
 
 
-def _end_in_world(body, point):
-    """(3,) world position of body-frame ``point`` of ``body`` (a BodySpec) at the start."""
-    return body.origin + rotation.rotate(rotation.to_matrix(body.orientation[None]),
-                                         np.asarray(point, dtype=float)[None])[0]
+def _effects(listed, bodies):
+    """Return each listed effect's settings resolved against ``bodies``; empty ones left out.
 
-
-def _check_spring_ends_apart(spec, key, bodies):
-    """Refuse a spring with a rest length whose ends start at one point.
-
-    Its force ``k (|d| - r) d / |d|`` would have no direction there (it would read as zero).
+    ``listed`` maps a scene key of :data:`rigid_sim.core.effects.REGISTRY` to its checked
+    entry; ``bodies`` are the scene's BodySpecs.
     """
-    if spec.rest_length == 0.0:
-        return
-    start = _end_in_world(bodies[spec.body], spec.point)
-    end = (spec.anchor if spec.other is None
-           else _end_in_world(bodies[spec.other], spec.other_point))
-    if np.linalg.norm(end - start) <= COINCIDENT * spec.rest_length:
-        raise Mistake(key, f'the spring starts with both ends at {start.tolist()}: with '
-                           f'rest_length {spec.rest_length} its force has no direction')
-
-
-def _spring(spring, key, names):
-    """Return a :class:`SpringSpec` from checked fields, ending at an anchor or an other body."""
-    if ('anchor' in spring) == ('other' in spring):
-        raise Mistake(key, 'give exactly one of anchor (a world point) or other (a body)')
-    if 'other_point' in spring and 'other' not in spring:
-        raise Mistake(f'{key}.other_point', 'other_point needs other (a body)')
-    for end in ('body', 'other'):
-        if end in spring and spring[end] not in names:
-            raise Mistake(f'{key}.{end}', f'no body named {spring[end]!r}; bodies: {names}')
-    index = {end: names.index(spring[end]) if end in spring else None
-             for end in ('body', 'other')}
-    if index['other'] == index['body']:
-        raise Mistake(f'{key}.other', 'a spring from a body to itself exerts no net force')
-    if index['other'] is not None:
-        spring.setdefault('other_point', np.zeros(3))
-    return SpringSpec(**{**spring, **index})
+    resolved = {name: EFFECTS[name].resolve(settings, f'effects.{name}', bodies)
+                for name, settings in listed.items()}
+    return {name: settings for name, settings in resolved.items() if settings is not None}
 
 
 def parse_scene(data, path='<memory>', base_dir='.', **limits):
@@ -322,14 +286,7 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
                         allowed, base_dir)
         field = scene.get('magnetic_field')
         bodies = _bodies(scene['bodies'], scene['world_frame'], budget, field is not None)
-        effects = dict(scene['effects'])
-        names = [body.name for body in bodies]
-        springs = tuple(_spring(spring, f'effects.springs[{i}]', names)
-                        for i, spring in enumerate(effects.pop('springs', ())))
-        for i, spec in enumerate(springs):
-            _check_spring_ends_apart(spec, f'effects.springs[{i}]', bodies)
-        if springs:  # an empty list lists no spring: nothing to build
-            effects['springs'] = springs
+        effects = _effects(scene['effects'], bodies)
     except Mistake as mistake:
         raise SceneError(path, mistake.key, mistake.reason) from None
     return Scene(path=str(path), world_frame=scene['world_frame'], bodies=bodies,
@@ -356,11 +313,6 @@ def load_scene(path, **limits):
                        **{name: allowed[name] for name in WORK_LIMITS})
 
 
-EFFECT_BUILDERS = {'gravity': lambda bodies, settings: Gravity(bodies, **settings),
-                   'damping': lambda bodies, settings: Damping(bodies, **settings),
-                   'springs': Springs}
-
-
 def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6, error_control=True):
     """Return the :class:`World` of ``scene``, with only the effects the scene lists.
 
@@ -379,8 +331,8 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6, error_cont
     initial = initial_state(
         bodies, stacked(lambda body: body.origin), stacked(lambda body: body.orientation),
         stacked(lambda body: body.linear_velocity), stacked(lambda body: body.angular_velocity))
-    effects = [EFFECT_BUILDERS[kind](bodies, settings)
-               for kind, settings in scene.effects.items()]
+    effects = [EFFECTS[name].from_settings(bodies, settings)
+               for name, settings in scene.effects.items()]
     accepts = [body.wrench_input for body in scene.bodies]
     inputs = AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts)
     return World(bodies, initial, effects, integrator, tolerance, inputs=inputs,

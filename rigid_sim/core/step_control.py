@@ -123,8 +123,8 @@ class StepController:
         ``effects`` are the parameters to sum, ``version`` the inputs' version (a change
         means the wrenches changed). ``y`` is never written.
         """
-        continuing = self._ended is not None and _same(self._ended, (y, version,
-                                                                    self.integrator))
+        continuing = (self._ended is not None
+                      and _same(self._ended, (y, version, self.integrator)))
         substeps, why = self._plan(y, dt, version, continuing)
         if not self._attempt(y, into, time, dt, substeps, effects, continuing):
             return self._record(None, substeps, why, version)
@@ -150,7 +150,7 @@ class StepController:
         return substeps, why
 
     def _bound_plan(self, y, dt, version):
-        """The guard's plan; the end check of the last step made it when nothing changed since.
+        """Return the guard's plan, made by the last end check if nothing changed since.
 
         It read the state, ``dt``, the inputs held, the integrator and the count kept.
         """

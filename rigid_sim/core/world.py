@@ -62,7 +62,7 @@ class World:
         self.torqued_by_effects = np.zeros(bodies.count, dtype=bool)
         for effect in self.effects:
             self.torqued_by_effects |= effect.torqued
-        self.torqued = self.inputs.torqued | self.torqued_by_effects
+        self.torqued = self.inputs.accepts_wrench | self.torqued_by_effects
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._effect_parameters = tuple(effect.parameters for effect in self.effects)
         self.control = StepController(
@@ -73,7 +73,7 @@ class World:
 
     @property
     def integrator(self):
-        """The integrator steps are made with; may be replaced between steps."""
+        """Return the integrator steps are made with; it may be replaced between steps."""
         return self.control.integrator
 
     @integrator.setter
@@ -87,8 +87,12 @@ class World:
 
     @property
     def diagnostics(self):
-        """What the step controller did (:class:`~rigid_sim.core.step_control.StepDiagnostics`)."""
+        """Return what the step controller did (a :class:`~step_control.StepDiagnostics`)."""
         return self.control.diagnostics
+
+    @diagnostics.setter
+    def diagnostics(self, diagnostics):
+        self.control.diagnostics = diagnostics
 
     @property
     def y(self):

@@ -64,12 +64,36 @@ def acts_per_body(effects):
 class Effect:
     """Base class: what an effect declares, with the defaults of a passive external force.
 
+    A subclass declares, as class attributes, its scene key ``name`` (under ``effects:``),
+    ``scene_fields``, the checker of its scene entry (built from
+    :mod:`rigid_sim.core.scene_fields`), and ``parts``, the NamedTuple classes its
+    ``parameters`` may be, each with a compiled kernel registered for it. The registry
+    (``rigid_sim.core.effects.REGISTRY``) refuses a class that leaves one out.
+
     Parameters
     ----------
     bodies : RigidBodies
     """
 
+    name = None                  # its key under the scene's effects:
+    scene_fields = None          # checker(value, key) -> settings, or raises Mistake
+    parts = ()                   # NamedTuple classes of its parameters, each with a kernel
     velocity_dependent = False   # its wrench depends on the momenta (dampers)
+
+    @classmethod
+    def resolve(cls, settings, key, bodies):
+        """Return the checked ``settings`` of a scene whose bodies are ``bodies``; None: empty.
+
+        For settings that name bodies (a spring's ends): ``bodies`` are the scene's BodySpecs.
+        Raises :class:`~rigid_sim.core.scene_fields.Mistake` at ``key`` or below it. None
+        means the entry lists nothing to build.
+        """
+        return settings
+
+    @classmethod
+    def from_settings(cls, bodies, settings):
+        """Return the effect on ``bodies`` (RigidBodies) of resolved scene ``settings``."""
+        return cls(bodies, **settings)
 
     def __init__(self, bodies):
         # (N,) bool: bodies it may torque; the rest move by the exact free flow in splittings.

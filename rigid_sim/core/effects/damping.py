@@ -12,6 +12,7 @@ import numpy as np
 
 from rigid_sim.core.effects.base import Effect, body_kernel_for
 from rigid_sim.core.compiled import helper
+from rigid_sim.core.scene_fields import non_negative, table
 
 
 class DampingParameters(NamedTuple):
@@ -24,6 +25,9 @@ class DampingParameters(NamedTuple):
 class Damping(Effect):
     """Momentum damping with rates ``linear`` and ``angular`` in 1/s."""
 
+    name = 'damping'
+    scene_fields = table({'linear': (non_negative, 0.0), 'angular': (non_negative, 0.0)})
+    parts = (DampingParameters,)
     velocity_dependent = True
 
     def __init__(self, bodies, linear=0.0, angular=0.0):

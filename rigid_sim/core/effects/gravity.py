@@ -7,6 +7,7 @@ import numpy as np
 
 from rigid_sim.core.effects.base import Effect, body_kernel_for
 from rigid_sim.core.compiled import helper
+from rigid_sim.core.scene_fields import REQUIRED, table, vector
 from rigid_sim.core.state import POSITION
 
 
@@ -18,6 +19,10 @@ class GravityParameters(NamedTuple):
 
 class Gravity(Effect):
     """Uniform gravitational acceleration acting on every body."""
+
+    name = 'gravity'
+    scene_fields = table({'acceleration': (vector, REQUIRED)})   # m/s^2, world axes
+    parts = (GravityParameters,)
 
     def __init__(self, bodies, acceleration):
         super().__init__(bodies)
@@ -40,3 +45,9 @@ def gravity_wrench(parameters, i, x, q, p, big_l, time, model):
     """Body ``i``'s weight, at its centre of mass: no torque."""
     weight = parameters.weight
     return (weight[i, 0], weight[i, 1], weight[i, 2]), (0.0, 0.0, 0.0)
+
+
+def gravity_of(effects):
+    """Return the (3,) acceleration, m/s^2, of the :class:`Gravity` in ``effects``; None: none."""
+    return next((effect.acceleration for effect in effects if isinstance(effect, Gravity)),
+                None)

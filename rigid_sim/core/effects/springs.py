@@ -11,7 +11,6 @@ Springs that all end in the world act on one body each: they then get a kernel o
 so that the integrators may take each body through a whole step in registers.
 """
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -19,20 +18,10 @@ import numpy as np
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.effects.base import Effect, body_kernel_for, kernel_for
-
-
-@dataclass(frozen=True)
-class SpringSpec:
-    """One spring, as the scene gives it."""
-
-    body: int                  # index of the first body
-    point: np.ndarray          # (3,) m, attachment in the first body's frame
-    stiffness: float           # N/m
-    damping: float = 0.0       # N s/m
-    rest_length: float = 0.0   # m
-    anchor: np.ndarray = None  # (3,) m, world; set when the spring ends in the world
-    other: int = None          # index of the second body; set when it ends on a body
-    other_point: np.ndarray = None  # (3,) m, in the second body's frame
+from rigid_sim.core.effects.spring_specs import resolve_springs, SPRING
+# Re-exported: a spring as the scene gives it is what this effect is built from.
+from rigid_sim.core.effects.spring_specs import SpringSpec  # noqa: F401
+from rigid_sim.core.scene_fields import list_of, table
 
 
 class SpringParameters(NamedTuple):
@@ -63,6 +52,23 @@ class AnchoredSpringParameters(NamedTuple):
 
 class Springs(Effect):
     """All springs of a scene, evaluated together."""
+
+    name = 'springs'
+    scene_fields = list_of(table(SPRING), 'springs')
+    parts = (SpringParameters, AnchoredSpringParameters)
+
+    @classmethod
+    def resolve(cls, settings, key, bodies):
+        """Return a :class:`SpringSpec` per checked entry, ends made indices into ``bodies``.
+
+        ``bodies`` are the scene's BodySpecs. None for an empty list: it lists no spring.
+        """
+        return resolve_springs(settings, key, bodies) or None
+
+    @classmethod
+    def from_settings(cls, bodies, settings):
+        """Return the springs on ``bodies`` (RigidBodies) of ``settings``, SpringSpecs."""
+        return cls(bodies, settings)
 
     def __init__(self, bodies, specs):
         super().__init__(bodies)

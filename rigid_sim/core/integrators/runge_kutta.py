@@ -46,7 +46,7 @@ class Tableau:
     rate_weight: float = 0.0   # the error over the difference per unit z (0: none)
 
     def arrays(self):
-        """Return ``a`` (S, S), ``b`` (S,), ``c`` (S,) as float arrays (kicks of a splitting)."""
+        """Return the tableau as float arrays ``a`` (S, S), ``b`` (S,), ``c`` (S,) (kicks)."""
         stages = len(self.b)
         a = np.zeros((stages, stages))
         for stage, row in enumerate(self.a):
@@ -247,7 +247,7 @@ def _ratio(change, slope):
 
 @helper
 def _pair(coordinate, momentum):
-    """The rate of a coordinate and its momentum from their two ratios (:func:`_step_rate`)."""
+    """Return the rate of a coordinate and its momentum from their ratios (:func:`_step_rate`)."""
     if coordinate > 0.0 and momentum > 0.0:
         return math.sqrt(coordinate * momentum)
     return max(coordinate, momentum)
@@ -271,7 +271,7 @@ def _step_rate(first, second, a21):
 
 @helper
 def _own_error(difference, rate_weight, rate):
-    """The method's own error from the embedded difference (:class:`Tableau`).
+    """Return the method's own error from the embedded difference (:class:`Tableau`).
 
     Never above the difference: that bounds it, and a rate not measured (0) keeps it.
     """
@@ -397,7 +397,7 @@ def _start_slopes_per_body(y, model, effects, time, body_axes, fsal):
 
 @helper
 def _take_slope(sums, estimate, slope, weight, estimate_weight):
-    """The step's sums and estimate (slope tuples) with ``slope`` added at their weights."""
+    """Return the step's sums and estimate (slope tuples) with ``slope`` added, weighted."""
     return _plus_slope(sums, weight, slope), _plus_slope(estimate, estimate_weight, slope)
 
 

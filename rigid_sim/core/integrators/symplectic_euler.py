@@ -50,7 +50,9 @@ def _kick_drift(y, model, force, torque, h, before, estimate):
 
 @helper
 def _add_errors(y, model, force, torque, h, before, estimate, scales, error):
-    """Close each body's estimate with the momenta's errors ``h/2`` (wrench change), into ``error``.
+    """Add each body's estimate, closed by the momenta's errors, into ``error``.
+
+    The momenta err by ``h/2`` times the change of the wrench over the step.
 
     ``force`` and ``torque`` hold the wrench at the step's end, ``before`` at its start.
     """
