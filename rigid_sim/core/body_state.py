@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.input_values import checked
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
+from rigid_sim.core.state import frame_rows, packed_rows
 
 # |q.q - 1| above this is a quaternion nobody meant as a rotation (tf2 refuses the same);
 # within it, q is normalised, as a float32-rounded or hand-typed unit quaternion needs.
@@ -42,27 +42,15 @@ def body_frame_state(bodies, y, index):
     origin : (3,) m, world;  orientation : (4,) (x, y, z, w), body to world;
     velocity : (3,) m/s of the origin, world;  angular_velocity : (3,) rad/s, world
     """
-    row = y[index]
-    turn = Rotation.from_quat(row[ORIENTATION]).as_matrix()
-    offset = turn @ bodies.com_in_body[index]
-    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
-    angular_velocity = np.linalg.solve(inertia_world, row[ANGULAR_MOMENTUM])
-    velocity_com = row[LINEAR_MOMENTUM] / bodies.mass[index]
-    return (row[POSITION] - offset, row[ORIENTATION].copy(),
-            velocity_com - np.cross(angular_velocity, offset), angular_velocity)
+    row = frame_rows(bodies, y, slice(index, index + 1))[0]
+    return row[0:3], row[3:7], row[7:10], row[10:13]
 
 
 def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity):
     """``y`` copied, with row ``index`` packed from the body frame's pose and twist."""
-    turn = Rotation.from_quat(orientation).as_matrix()
-    offset = turn @ bodies.com_in_body[index]
-    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
     new = np.array(y, dtype=float, copy=True)
-    row = new[index]
-    row[POSITION] = origin + offset
-    row[ORIENTATION] = orientation
-    row[LINEAR_MOMENTUM] = bodies.mass[index] * (velocity + np.cross(angular_velocity, offset))
-    row[ANGULAR_MOMENTUM] = inertia_world @ angular_velocity
+    new[index] = packed_rows(bodies, slice(index, index + 1), origin[None], orientation[None],
+                             velocity[None], angular_velocity[None])[0]
     return new
 
 

@@ -13,8 +13,8 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import rotation
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects.damping import Damping
@@ -268,8 +268,8 @@ def world_frame_clash(bodies, world_frame):
 
 def _end_in_world(body, point):
     """(3,) world position of body-frame ``point`` of ``body`` (a BodySpec) at the start."""
-    return body.origin + rotation.rotate(rotation.to_matrix(body.orientation[None]),
-                                         np.asarray(point, dtype=float)[None])[0]
+    turn = Rotation.from_quat(body.orientation)
+    return body.origin + turn.apply(np.asarray(point, dtype=float))
 
 
 def _check_spring_ends_apart(spec, key, bodies):
