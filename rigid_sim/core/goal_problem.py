@@ -71,7 +71,8 @@ class GoalProblem:
         self.target = position, orientation
         # q -> q_goal^-1 q as one matrix, the rotation error of many rows in one product.
         self._aim = position, left_product(Rotation.from_quat(orientation).inv().as_quat()).T
-        self._lever = world.bodies.com_in_body[index]
+        # A copy: Rotation.apply refuses a read-only array, which a scene's may be.
+        self._lever = np.array(world.bodies.com_in_body[index], dtype=float)
         self.count, self.aims = UNKNOWNS[goal.unknowns]
         self.wrench = goal.unknowns == 'wrench'
         self.y = world.y.copy()
@@ -181,7 +182,7 @@ class GoalProblem:
             raise GoalRefused('the flight at the solution is not finite')
         turn = Rotation.from_quat(final[3:7])
         position, orientation = self.target
-        offset = final[:3] - turn.apply(self.world.bodies.com_in_body[self.index]) - position
+        offset = final[:3] - turn.apply(self._lever) - position
         angle = angle_between(orientation[None], final[None, 3:7])[0]
         return float(np.linalg.norm(offset)), float(angle)
 
@@ -216,7 +217,7 @@ class GoalProblem:
             raise GoalRefused('the flight of the current motion is not finite')
         turn = Rotation.from_quat(final[0, 3:7])
         position, orientation = self.target
-        end = final[0, :3] - turn.apply(self.world.bodies.com_in_body[self.index])
+        end = final[0, :3] - turn.apply(self._lever)
         gap = position - end
         turn_gap = rotation_vector((left_product(orientation)
                                     @ turn.inv().as_quat())[None])[0]

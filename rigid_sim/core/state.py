@@ -146,8 +146,9 @@ def packed_rows(bodies, which, origin, orientation, velocity, angular_velocity):
         given), origin's velocity (world, m/s), angular velocity (world, rad/s).
     """
     turn = Rotation.from_quat(orientation)
-    offset = turn.apply(bodies.com_in_body[which])
-    spin_body = turn.inv().apply(angular_velocity)
+    # Rotation.apply refuses read-only arrays, as a caller's broadcast_to views are.
+    offset = turn.apply(np.array(bodies.com_in_body[which], dtype=float))
+    spin_body = turn.inv().apply(np.array(angular_velocity, dtype=float))
     rows = np.empty((len(offset), STATE_WIDTH))
     rows[:, POSITION] = origin + offset
     rows[:, ORIENTATION] = orientation
