@@ -16,8 +16,6 @@ from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, MagneticField
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rigid_sim.core import rotation
-
 NANOSECONDS = 1_000_000_000
 # One colour per body, cycled: distinguishable shapes in RViz (RGBA, 0..1).
 PALETTE = ((0.90, 0.35, 0.20), (0.20, 0.55, 0.90), (0.30, 0.75, 0.35), (0.85, 0.75, 0.20),
@@ -105,14 +103,9 @@ class StateMessages:
         world and body twists are written. Every message's stamp is the snapshot's time; the others
         keep their last values.
         """
-        origin, orientation = snapshot.body_frame_pose()
-        velocity, angular_velocity = snapshot.body_frame_twist()
-        # REP-105: odometry twist in the child (body) frame's axes.
-        velocity_body = rotation.rotate_inverse(snapshot.rotation, velocity)
-        angular_body = rotation.rotate_inverse(snapshot.rotation, angular_velocity)
         to_time(snapshot.time, self.stamp)
-        rows = np.hstack((origin, orientation, velocity, angular_velocity, velocity_body,
-                          angular_body)).tolist()
+        # [origin, orientation, world twist, body-axes twist (REP-105: odometry's)] per body.
+        rows = snapshot.frames.tolist()
         for index in posed:
             _set_pose(self.poses[index].pose, rows[index][0:7])
         for index in moving:

@@ -21,7 +21,7 @@ class ImuOutputs:
     Parameters
     ----------
     node : rigid_sim.node.RigidSimNode
-        Creates (through its ``qos_overrides``) and destroys the publishers.
+        Its ``qos_overrides`` make the IMU publishers, which it destroys when the scene goes.
     scene : rigid_sim.core.scene.Scene
         The scene whose bodies may carry IMUs.
     world : rigid_sim.core.world.World

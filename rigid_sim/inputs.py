@@ -83,7 +83,6 @@ class BodyInputs:
         self._awaited = {}         # resolved topic name -> (topic, body index), not subscribed
         # (topic, body index, frame_id) -> newest message since the last tick
         self._inbox = {}
-        self._waiting = 0          # messages received since the last tick, superseded too
         self.received = 0          # input messages taken since the node started
         self._names = []           # body names of the scene, in scene order
         self.refusals = Refusals(())
@@ -133,7 +132,6 @@ class BodyInputs:
 
     def _store(self, topic, index, message):
         self.received += 1
-        self._waiting += 1
         key = (topic, index, message.header.frame_id)
         if self._inbox.pop(key, None) is not None:
             self.refusals.superseded[self._names[index]] += 1
@@ -159,15 +157,9 @@ class BodyInputs:
         return {subscription.topic_name for subscription in self._subscriptions} | set(
             self._awaited)
 
-    @property
-    def pending(self):
-        """Return the number of messages received since the last tick (superseded too)."""
-        return self._waiting
-
     def clear(self):
         """Forget every message not applied yet."""
         self._inbox.clear()
-        self._waiting = 0
 
     def apply(self, world, scene, settings):
         """Apply the newest stored messages in arrival order; a refused one changes nothing.
@@ -181,7 +173,7 @@ class BodyInputs:
         settings : rigid_sim.parameters.Settings
             ``world_frame`` and ``wrench_timeout`` are read.
         """
-        inbox, self._inbox, self._waiting = self._inbox, {}, 0
+        inbox, self._inbox = self._inbox, {}
         for (topic, index, _), message in inbox.items():
             try:
                 self._appliers[topic](world, scene.bodies[index], index, message, settings)

@@ -146,11 +146,6 @@ class RigidSimNode(Node):
         """Return whether integration is paused."""
         return self.control.paused
 
-    @property
-    def pending_inputs(self):
-        """Return the number of received input messages the next tick will apply."""
-        return self.inputs.pending
-
     def _warn_on_slow_ticks_for_imus(self):
         # An IMU reads at most once per tick: say so rather than read slower silently.
         imus = self.imu_outputs.imus

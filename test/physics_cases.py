@@ -98,7 +98,7 @@ def allowed_error(name, rate, dt):
 
 def body_angular_velocity(snapshot):
     """(N, 3) angular velocity in body axes, ``R^T omega``, rad/s."""
-    return np.einsum('nji,nj->ni', snapshot.rotation, snapshot.angular_velocity)
+    return Rotation.from_quat(snapshot.y[:, 3:7]).inv().apply(snapshot.angular_velocity)
 
 
 def rotation_error(q, q_reference):

@@ -19,7 +19,7 @@ import yaml
 from scipy.optimize import least_squares
 
 from rigid_sim import bench
-from rigid_sim.core import rotation
+from rigid_sim.core.rotation import angle_between
 from rigid_sim.core.body_state import body_frame_state, with_twist
 from rigid_sim.core.scene import build_world, parse_scene
 from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver
@@ -105,7 +105,7 @@ def final_errors(case, goal, values):
     """Position (m) and orientation (rad) errors of a fresh World flown with ``values``."""
     final = fly(case, values)
     return (float(np.linalg.norm(final[:3] - goal.position)),
-            float(rotation.angle_between(final[None, 3:7], goal.orientation[None])[0]))
+            float(angle_between(final[None, 3:7], goal.orientation[None])[0]))
 
 
 def ours(solver, goal):
@@ -199,7 +199,7 @@ def plot(path):
     left.set_title('solved path of the body frame origin; circles: the goal')
     left.legend()
     wanted = np.broadcast_to(goal.orientation, orientations.shape)
-    angles = rotation.angle_between(orientations, wanted)
+    angles = angle_between(orientations, wanted)
     right.semilogy(times, np.maximum(angles, 1e-16))
     right.set_xlabel('simulated time (s)')
     right.set_title('angle to the goal orientation (rad)')

@@ -17,8 +17,8 @@ world site (``refsite``): a force of fixed world direction at the body point, he
 constant control.
 """
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import rotation
 from rigid_sim import bench
 from rigid_sim.bench.cases import (MASS, MOMENTS, PUSH_FORCE, PUSH_POINT, SPRING_DAMPING,
                                    SPRING_START, SPRING_STIFFNESS, score)
@@ -101,18 +101,20 @@ def final_state(case, data):
     """Orientation (x, y, z, w), omega world, the case's energy, L world, position.
 
     MuJoCo resets a simulation whose state blows up and only raises a warning counter; such
-    a run is reported as non-finite (diverged), not scored from the reset state.
+    a run, like one whose orientation is not finite, is reported as non-finite (diverged),
+    not scored from the reset state.
     """
-    if any(data.warning[kind].number for kind in DIVERGENCE_WARNINGS):
+    if (any(data.warning[kind].number for kind in DIVERGENCE_WARNINGS)
+            or not np.all(np.isfinite(data.qpos[3:7]))):
         nan = np.full(3, np.nan)
         return np.full(4, np.nan), nan, np.nan, nan, nan
     w, x, y, z = data.qpos[3:7]
-    q = rotation.normalize(np.array([[x, y, z, w]]))
-    matrix = rotation.to_matrix(q)[0]
+    turn = Rotation.from_quat([x, y, z, w])
+    matrix = turn.as_matrix()
     omega_body = np.array(data.qvel[3:6])
     position, velocity = np.array(data.qpos[0:3]), np.array(data.qvel[0:3])
     energy = case_energy(case, position, omega_body, velocity, matrix)
-    return q[0], matrix @ omega_body, energy, matrix @ (MOMENTS * omega_body), position
+    return turn.as_quat(), matrix @ omega_body, energy, matrix @ (MOMENTS * omega_body), position
 
 
 def initial_translation(case):

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.input_values import checked
-from rigid_sim.core.state import ANGULAR_MOMENTUM, LINEAR_MOMENTUM, ORIENTATION, POSITION
+from rigid_sim.core.state import frame_rows, packed_rows
 
 # |q.q - 1| above this is a quaternion nobody meant as a rotation (tf2 refuses the same);
 # within it, q is normalised, as a float32-rounded or hand-typed unit quaternion needs.
@@ -42,27 +42,15 @@ def body_frame_state(bodies, y, index):
     origin : (3,) m, world;  orientation : (4,) (x, y, z, w), body to world;
     velocity : (3,) m/s of the origin, world;  angular_velocity : (3,) rad/s, world
     """
-    row = y[index]
-    turn = Rotation.from_quat(row[ORIENTATION]).as_matrix()
-    offset = turn @ bodies.com_in_body[index]
-    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
-    angular_velocity = np.linalg.solve(inertia_world, row[ANGULAR_MOMENTUM])
-    velocity_com = row[LINEAR_MOMENTUM] / bodies.mass[index]
-    return (row[POSITION] - offset, row[ORIENTATION].copy(),
-            velocity_com - np.cross(angular_velocity, offset), angular_velocity)
+    row = frame_rows(bodies, y, slice(index, index + 1))[0]
+    return row[0:3], row[3:7], row[7:10], row[10:13]
 
 
 def _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity):
     """``y`` copied, with row ``index`` packed from the body frame's pose and twist."""
-    turn = Rotation.from_quat(orientation).as_matrix()
-    offset = turn @ bodies.com_in_body[index]
-    inertia_world = turn @ bodies.inertia_body[index] @ turn.T
     new = np.array(y, dtype=float, copy=True)
-    row = new[index]
-    row[POSITION] = origin + offset
-    row[ORIENTATION] = orientation
-    row[LINEAR_MOMENTUM] = bodies.mass[index] * (velocity + np.cross(angular_velocity, offset))
-    row[ANGULAR_MOMENTUM] = inertia_world @ angular_velocity
+    new[index] = packed_rows(bodies, slice(index, index + 1), origin[None], orientation[None],
+                             velocity[None], angular_velocity[None])[0]
     return new
 
 
@@ -96,31 +84,24 @@ def with_twist(bodies, y, index, velocity, angular_velocity):
     return _with_row(bodies, y, index, origin, orientation, velocity, angular_velocity)
 
 
-def seen_from(frame, state):
-    """Return a body frame's pose and twist as observed from another moving frame.
+def seen_in_world(frame, relative):
+    """Return a body frame's pose and twist given relative to another moving frame, in world.
 
     Parameters
     ----------
-    frame, state : tuple
+    frame : tuple
         (origin (3,) m, orientation (4,) (x, y, z, w), velocity (3,) m/s of the origin,
         angular velocity (3,) rad/s), world, as :func:`body_frame_state` gives them: the
-        observing frame's and the observed body frame's.
+        frame the pose and twist are given in.
+    relative : tuple
+        The same four of the body frame, in ``frame``'s axes and relative to it.
 
     Returns
     -------
     tuple
-        The same four, in ``frame``'s axes, relative to it: ``R^T (p - p_f)``, ``q_f^-1 q``,
-        ``R^T (v - v_f - w_f x (p - p_f))``, ``R^T (w - w_f)``.
+        The same four in world: ``p_f + R p``, ``q_f q``, ``v_f + w_f x R p + R v``,
+        ``w_f + R w``.
     """
-    turn = Rotation.from_quat(frame[1])
-    offset = np.asarray(state[0]) - frame[0]
-    relative = np.asarray(state[2]) - frame[2] - np.cross(frame[3], offset)
-    return (turn.inv().apply(offset), (turn.inv() * Rotation.from_quat(state[1])).as_quat(),
-            turn.inv().apply(relative), turn.inv().apply(np.asarray(state[3]) - frame[3]))
-
-
-def seen_in_world(frame, relative):
-    """Invert :func:`seen_from`: a pose and twist given in ``frame`` as world ones."""
     turn = Rotation.from_quat(frame[1])
     offset = turn.apply(relative[0])
     return (frame[0] + offset, (turn * Rotation.from_quat(relative[1])).as_quat(),

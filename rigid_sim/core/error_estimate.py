@@ -61,20 +61,13 @@ def store_scales(y, model, dt, scales):
 
 
 @helper
-def _largest(v, scale):
-    """Largest ``|v_k|`` of a tuple divided by ``scale``."""
-    largest = 0.0
-    for k in range(len(v)):
-        largest = max(largest, abs(v[k]))
-    return largest / scale
-
-
-@helper
 def scaled_size(dx, dq, dp, dl, scales):
     """Largest component of the error (``dx``, ``dq``, ``dp``, ``dl`` tuples) over its scale."""
     length, momentum, angular = scales
-    return max(max(_largest(dx, length), _largest(dq, 1.0)),
-               max(_largest(dp, momentum), _largest(dl, angular)))
+    position = max(abs(dx[0]), abs(dx[1]), abs(dx[2])) / length
+    turn = max(abs(dq[0]), abs(dq[1]), abs(dq[2]), abs(dq[3]))
+    linear = max(abs(dp[0]), abs(dp[1]), abs(dp[2])) / momentum
+    return max(position, turn, linear, max(abs(dl[0]), abs(dl[1]), abs(dl[2])) / angular)
 
 
 @kernel

@@ -10,8 +10,9 @@ product. Wrench unknowns leave the start as it is and are held on the copies ins
 import math
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import rotation
+from rigid_sim.core.rotation import angle_between
 from rigid_sim.core.body_state import body_frame_state, with_twist
 from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, fly_world,
                                         free_under_exact_flow, held_without_goal)
@@ -69,8 +70,9 @@ class GoalProblem:
         self.world, self.goal, self.index = world, goal, index
         self.target = position, orientation
         # q -> q_goal^-1 q as one matrix, the rotation error of many rows in one product.
-        self._aim = position, left_product(rotation.conjugate(orientation[None])[0]).T
-        self._lever = world.bodies.com_in_body[index]
+        self._aim = position, left_product(Rotation.from_quat(orientation).inv().as_quat()).T
+        # A copy: Rotation.apply refuses a read-only array, which a scene's may be.
+        self._lever = np.array(world.bodies.com_in_body[index], dtype=float)
         self.count, self.aims = UNKNOWNS[goal.unknowns]
         self.wrench = goal.unknowns == 'wrench'
         self.y = world.y.copy()
@@ -123,7 +125,7 @@ class GoalProblem:
         bodies, index = self.world.bodies, self.index
         _, q, velocity, spin = body_frame_state(bodies, self.y, index)
         self._twist = velocity, spin
-        turn = rotation.to_matrix(q[None])[0]
+        turn = Rotation.from_quat(q).as_matrix()
         mass = bodies.mass[index]
         lever = _skew(turn @ bodies.com_in_body[index])
         inertia = turn @ bodies.inertia_body[index] @ turn.T
@@ -165,7 +167,10 @@ class GoalProblem:
         if self.aims[0]:
             origin = final[:, :3]
             if self._lever.any():
-                origin = origin - rotation.to_matrix(final[:, 3:7]) @ self._lever
+                # A failed flight's row is all NaN, which Rotation refuses: its origin stays
+                # NaN whatever turns its lever.
+                q = np.where(np.isnan(final[:, 3:7]), 1.0, final[:, 3:7])
+                origin = origin - Rotation.from_quat(q).apply(self._lever)
             parts.append(origin - position)
         if self.aims[1]:
             parts.append(rotation_vector(final[:, 3:7] @ inverse))
@@ -173,10 +178,12 @@ class GoalProblem:
 
     def errors(self, final):
         """Position error (m) and orientation error (rad) of the final state (13,)."""
-        turn = rotation.to_matrix(final[None, 3:7])[0]
+        if not np.isfinite(final).all():
+            raise GoalRefused('the flight at the solution is not finite')
+        turn = Rotation.from_quat(final[3:7])
         position, orientation = self.target
-        offset = final[:3] - turn @ self.world.bodies.com_in_body[self.index] - position
-        angle = rotation.angle_between(orientation[None], final[None, 3:7])[0]
+        offset = final[:3] - turn.apply(self._lever) - position
+        angle = angle_between(orientation[None], final[None, 3:7])[0]
         return float(np.linalg.norm(offset)), float(angle)
 
     def poses(self, trace):
@@ -188,8 +195,8 @@ class GoalProblem:
             return None
         times = np.array([time for time, _ in trace])
         states = np.array([state for _, state in trace])
-        turns = rotation.to_matrix(states[:, 3:7])
-        return times, states[:, :3] - turns @ self._lever, states[:, 3:7].copy()
+        levers = Rotation.from_quat(states[:, 3:7]).apply(self._lever)
+        return times, states[:, :3] - levers, states[:, 3:7].copy()
 
     @staticmethod
     def close_enough(residual, tolerance=TOLERANCE):
@@ -208,12 +215,12 @@ class GoalProblem:
                                    self.current[None] if self.wrench else None)
         if not np.isfinite(final).all():
             raise GoalRefused('the flight of the current motion is not finite')
-        turn = rotation.to_matrix(final[:, 3:7])[0]
+        turn = Rotation.from_quat(final[0, 3:7])
         position, orientation = self.target
-        end = final[0, :3] - turn @ self.world.bodies.com_in_body[self.index]
+        end = final[0, :3] - turn.apply(self._lever)
         gap = position - end
         turn_gap = rotation_vector((left_product(orientation)
-                                    @ rotation.conjugate(final[:, 3:7])[0])[None])[0]
+                                    @ turn.inv().as_quat())[None])[0]
         if self.wrench:
             force = 2.0 * self.mass * gap / self.horizon ** 2
             torque = 2.0 * self.inertia @ turn_gap / self.horizon ** 2

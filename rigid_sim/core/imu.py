@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_sim.core import rotation
 from rigid_sim.core.effects.gravity import gravity_of
 from rigid_sim.core.imu_kinematics import readings
 from rigid_sim.core.imu_noise import NoisySensor
@@ -99,13 +98,14 @@ class Imus:
         self.specs = [spec for _, spec in mounted]
         self._mass = bodies.mass[self.bodies]
         self._inertia = bodies.inertia_body[self.bodies]
-        self._inertia_inv = np.linalg.inv(self._inertia)
+        self._inertia_inv = bodies.model.inertia_inv[self.bodies]
         self._lever = np.array([spec.point for spec in self.specs]) - bodies.com_in_body[
             self.bodies]
         self._gravity = np.asarray(gravity, dtype=float)
-        self._field = np.asarray(magnetic_field, dtype=float)
         self._blind = np.array([not spec.orientation for spec in self.specs])
-        self._reads_field = any(spec.magnetometer for spec in self.specs)
+        # Without a magnetometer the field reads zero, as the Readings say.
+        self._field = (np.asarray(magnetic_field, dtype=float)
+                       if any(spec.magnetometer for spec in self.specs) else np.zeros(3))
         self._next = np.zeros(len(mounted))      # s, when each reads next
         self._last = np.full(len(mounted), math.nan)
         self._sensors = []
@@ -155,16 +155,11 @@ class Imus:
         bodies = [self.bodies[k] for k in which]
         y = world.y[bodies]
         force, torque = world.net_wrench()
-        omega, specific_force = np.empty((len(bodies), 3)), np.empty((len(bodies), 3))
+        omega, specific_force, field = (np.empty((len(bodies), 3)) for _ in range(3))
         readings(np.ascontiguousarray(y[:, ORIENTATION]),
                  np.ascontiguousarray(y[:, ANGULAR_MOMENTUM]), force[bodies], torque[bodies],
                  self._inertia[which], self._inertia_inv[which], self._mass[which],
-                 self._lever[which], self._gravity, omega, specific_force)
+                 self._lever[which], self._gravity, self._field, omega, specific_force, field)
         orientation = y[:, ORIENTATION].copy()
-        field = np.zeros((len(bodies), 3))
-        if self._reads_field:   # else an IMU pays nothing for magnetometers it has not
-            turn = rotation.to_matrix(rotation.normalize(orientation))
-            field[:] = self._field
-            field = rotation.rotate_inverse(turn, field)
         orientation[self._blind[which]] = 0.0
         return Readings(world.time, list(which), omega, specific_force, orientation, field)

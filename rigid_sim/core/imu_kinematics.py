@@ -12,9 +12,9 @@ from rigid_sim.core.compiled import kernel
 
 
 @kernel
-def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, gravity,
-             omega, specific_force):
-    """Fill ``omega`` and ``specific_force`` (K, 3), body axes, of K IMUs.
+def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, gravity, field,
+             omega, specific_force, magnetic):
+    """Fill ``omega``, ``specific_force`` and ``magnetic`` (K, 3), body axes, of K IMUs.
 
     Parameters
     ----------
@@ -36,15 +36,19 @@ def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, grav
         Mount point minus centre of mass, body axes, m.
     gravity : (3,) float
         Gravitational acceleration, world, m/s^2.
+    field : (3,) float
+        Magnetic field, world, T.
     omega : (K, 3) float
         Output: angular velocity, body axes, rad/s.
     specific_force : (K, 3) float
         Output: specific force at the mount point, body axes, m/s^2.
+    magnetic : (K, 3) float
+        Output: ``field`` in body axes, T.
     """
     for k in range(q.shape[0]):
         turn = kin.matrix(kin.normalize(kin.orientation_row(q, k)))
         inverse = kin.entries(inertia_inv, k)
-        om = kin.rotate(inverse, kin.rotate_inverse(turn, kin.vector(momentum, k, 0)))
+        om = kin.body_angular_velocity(turn, inverse, kin.vector(momentum, k, 0))
         turned = kin.rotate_inverse(turn, kin.vector(torque, k, 0))
         gyroscopic = kin.cross(om, kin.rotate(kin.entries(inertia, k), om))
         alpha = kin.rotate(inverse, (turned[0] - gyroscopic[0], turned[1] - gyroscopic[1],
@@ -56,6 +60,7 @@ def readings(q, momentum, force, torque, inertia, inertia_inv, mass, lever, grav
         tangential = kin.cross(alpha, r)
         centripetal = kin.cross(om, kin.cross(om, r))
         kin.store(omega, k, 0, om)
+        kin.store(magnetic, k, 0, kin.rotate_inverse(turn, (field[0], field[1], field[2])))
         kin.store(specific_force, k, 0, (weightless[0] + tangential[0] + centripetal[0],
                                          weightless[1] + tangential[1] + centripetal[1],
                                          weightless[2] + tangential[2] + centripetal[2]))

@@ -150,8 +150,8 @@ def copy_columns(target, at, source, start, count):
 
 
 @helper
-def angular_velocity(r, inertia_inv, angular_momentum):
-    """``omega = R I_body^-1 R^T L``, world axes, rad/s: the one place it is defined.
+def body_angular_velocity(r, inertia_inv, angular_momentum):
+    """``omega_b = I_body^-1 R^T L``, body axes, rad/s: the one place it is defined.
 
     Parameters
     ----------
@@ -165,18 +165,18 @@ def angular_velocity(r, inertia_inv, angular_momentum):
     Returns
     -------
     3-tuple of float
-        Angular velocity, rad/s, world axes.
+        Angular velocity, rad/s, body axes.
     """
-    return rotate(r, rotate(inertia_inv, rotate_inverse(r, angular_momentum)))
+    return rotate(inertia_inv, rotate_inverse(r, angular_momentum))
 
 
-@kernel
-def angular_velocities(y, inertia_inv, out):
-    """``omega`` (N, 3) of every body of the packed state ``y`` (N, 13) into ``out``."""
-    for i in range(y.shape[0]):
-        r = matrix(orientation(y, i))
-        store(out, i, 0, angular_velocity(r, entries(inertia_inv, i), vector(y, i, 10)))
-    return out
+@helper
+def angular_velocity(r, inertia_inv, angular_momentum):
+    """``omega = R I_body^-1 R^T L``, world axes, rad/s: :func:`body_angular_velocity` turned.
+
+    The arguments are those of :func:`body_angular_velocity`.
+    """
+    return rotate(r, body_angular_velocity(r, inertia_inv, angular_momentum))
 
 
 @kernel
@@ -249,8 +249,8 @@ def largest_spin(y, inertia_inv, covered, held, everyone):
     largest = 0.0
     for i in range(y.shape[0]):
         if everyone or covered[i] or held[i]:
-            r = matrix(orientation(y, i))
-            body = rotate(entries(inertia_inv, i), rotate_inverse(r, vector(y, i, 10)))
+            body = body_angular_velocity(matrix(orientation(y, i)), entries(inertia_inv, i),
+                                         vector(y, i, 10))
             largest = max(largest, dot(body, body))
     return math.sqrt(largest)
 

@@ -17,8 +17,9 @@ refused with a ``kind`` a caller can map to its own codes.
 from dataclasses import replace
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import body_state, rotation
+from rigid_sim.core import body_state
 from rigid_sim.core.scene import (
     load_scene, parse_body, SceneError, world_frame_clash)
 from rigid_sim.core.scene_fields import Mistake, token
@@ -106,11 +107,11 @@ def placed(spec, origin, orientation, compose=False):
         raise SpawnRefused('pose', f'initial_pose: {error}') from None
     if not compose:
         return replace(spec, origin=origin, orientation=orientation)
-    turn = rotation.to_matrix(orientation[None])[0]
-    return replace(spec, origin=origin + turn @ spec.origin,
-                   orientation=rotation.multiply(orientation[None], spec.orientation[None])[0],
-                   linear_velocity=turn @ spec.linear_velocity,
-                   angular_velocity=turn @ spec.angular_velocity)
+    turn = Rotation.from_quat(orientation)
+    return replace(spec, origin=origin + turn.apply(spec.origin),
+                   orientation=(turn * Rotation.from_quat(spec.orientation)).as_quat(),
+                   linear_velocity=turn.apply(spec.linear_velocity),
+                   angular_velocity=turn.apply(spec.angular_velocity))
 
 
 def with_bodies(scene, added, springs=()):

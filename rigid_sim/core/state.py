@@ -13,7 +13,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import kinematics, rotation
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import kernel
 from rigid_sim.core.inertia import check_inertia
 
 POSITION = slice(0, 3)
@@ -122,24 +123,80 @@ def initial_state(bodies, origin, orientation, linear_velocity, angular_velocity
     origin : (N, 3) float
         Body-frame origin, world, m.
     orientation : (N, 4) float
-        Quaternion (x, y, z, w), body to world.
+        Quaternion (x, y, z, w), body to world; normalised here.
     linear_velocity : (N, 3) float
         Velocity of the body-frame origin, world, m/s.
     angular_velocity : (N, 3) float
         World axes, rad/s.
     """
-    q = rotation.normalize(np.asarray(orientation, dtype=float).reshape(-1, 4))
-    matrices = rotation.to_matrix(q)
-    com_offset = rotation.rotate(matrices, bodies.com_in_body)
-    omega = np.asarray(angular_velocity, dtype=float).reshape(-1, 3)
-    velocity_com = linear_velocity + np.cross(omega, com_offset)
-    inertia_world = matrices @ bodies.inertia_body @ matrices.transpose(0, 2, 1)
-    y = np.empty((bodies.count, STATE_WIDTH))
-    y[:, POSITION] = np.asarray(origin, dtype=float) + com_offset
-    y[:, ORIENTATION] = q
-    y[:, LINEAR_MOMENTUM] = bodies.mass[:, None] * velocity_com
-    y[:, ANGULAR_MOMENTUM] = rotation.rotate(inertia_world, omega)
-    return y
+    q = np.asarray(orientation, dtype=float).reshape(-1, 4)
+    q = q / np.linalg.norm(q, axis=1)[:, None]
+    return packed_rows(bodies, slice(None), origin, q, linear_velocity,
+                       np.asarray(angular_velocity, dtype=float).reshape(-1, 3))
+
+
+def packed_rows(bodies, which, origin, orientation, velocity, angular_velocity):
+    """Packed rows (K, 13) of the bodies ``which`` selects, their frames' poses and twists given.
+
+    ``x = o + R c``, ``P = M (v_o + omega x R c)``, ``L = R I_body R^T omega``.
+
+    Parameters
+    ----------
+    bodies : RigidBodies
+        Their masses, inertias and centres of mass.
+    which : slice or (K,) int
+        The bodies, as an index into ``bodies``' arrays.
+    origin, orientation, velocity, angular_velocity : (K, 3), (K, 4), (K, 3), (K, 3) float
+        Body-frame origin (world, m), unit quaternion (x, y, z, w, body to world; stored as
+        given), origin's velocity (world, m/s), angular velocity (world, rad/s).
+    """
+    turn = Rotation.from_quat(orientation)
+    # Rotation.apply refuses read-only arrays, as a caller's broadcast_to views are.
+    offset = turn.apply(np.array(bodies.com_in_body[which], dtype=float))
+    spin_body = turn.inv().apply(np.array(angular_velocity, dtype=float))
+    rows = np.empty((len(offset), STATE_WIDTH))
+    rows[:, POSITION] = origin + offset
+    rows[:, ORIENTATION] = orientation
+    rows[:, LINEAR_MOMENTUM] = (bodies.mass[which][:, None]
+                                * (velocity + np.cross(angular_velocity, offset)))
+    rows[:, ANGULAR_MOMENTUM] = turn.apply(np.einsum('nij,nj->ni', bodies.inertia_body[which],
+                                                     spin_body))
+    return rows
+
+
+@kernel
+def body_frames(y, inertia_inv, inverse_mass, com_in_body, out):
+    """Fill ``out`` (N, 19) with each body frame's pose and twist in the packed state ``y``.
+
+    A row is ``[o, q, v_o, omega, R^T v_o, R^T omega]``: the frame origin ``o = x - R c``
+    (world, m), the orientation (x, y, z, w), the origin's velocity ``v_o = P / M - omega x
+    R c`` and the angular velocity in world axes (m/s, rad/s), then both in body axes.
+    ``inertia_inv`` (N, 3, 3), ``inverse_mass`` (N,) and ``com_in_body`` (N, 3) are the
+    static model's (:class:`RigidBodies`).
+    """
+    for i in range(y.shape[0]):
+        x, q, momentum, big_l = kin.body_state(y, i)
+        r = kin.matrix(q)
+        spin = kin.body_angular_velocity(r, kin.entries(inertia_inv, i), big_l)
+        omega = kin.rotate(r, spin)   # kin.angular_velocity, sharing its body-axes value
+        offset = kin.rotate(r, kin.vector(com_in_body, i, 0))
+        velocity = kin.plus_scaled(kin.cross(offset, omega), inverse_mass[i], momentum)
+        kin.store(out, i, 0, kin.plus_scaled(x, -1.0, offset))
+        kin.store(out, i, 3, q)
+        kin.store(out, i, 7, velocity)
+        kin.store(out, i, 10, omega)
+        kin.store(out, i, 13, kin.rotate_inverse(r, velocity))
+        kin.store(out, i, 16, spin)
+    return out
+
+
+def frame_rows(bodies, y, which=slice(None)):
+    """Rows (K, 19) of :func:`body_frames` for the bodies ``which`` (a slice) of state ``y``."""
+    model = bodies.model
+    rows = y[which]
+    return body_frames(np.ascontiguousarray(rows, dtype=float), model.inertia_inv[which],
+                       model.inverse_mass[which], np.ascontiguousarray(bodies.com_in_body[which]),
+                       np.empty((rows.shape[0], 19)))
 
 
 class Snapshot:
@@ -164,55 +221,41 @@ class Snapshot:
         self.time = time
 
     @cached_property
-    def rotation_rows(self):
-        """(3, 3, N) ``R``, body to world, one row per matrix entry."""
-        return rotation.matrix_rows(self.y.T[ORIENTATION])
-
-    @property
-    def rotation(self):
-        """(N, 3, 3) ``R``, body to world (a view of ``rotation_rows``)."""
-        return self.rotation_rows.transpose(2, 0, 1)
+    def frames(self):
+        """(N, 19) pose and twist of each body frame (:func:`frame_rows`)."""
+        return frame_rows(self.bodies, self.y)
 
     @cached_property
     def velocity(self):
         """(N, 3) centre-of-mass velocity ``v = P / M``, world, m/s."""
         return (self.y.T[LINEAR_MOMENTUM] * self.bodies.inverse_mass).T
 
-    @cached_property
+    @property
     def angular_velocity(self):
         """(N, 3) angular velocity, world, rad/s (see :func:`kinematics.angular_velocity`)."""
-        return kinematics.angular_velocities(self.y, self.bodies.model.inertia_inv,
-                                             np.empty((self.bodies.count, 3)))
-
-    @cached_property
-    def com_offset(self):
-        """(N, 3) ``R c``: from the body-frame origin to the centre of mass, world, m."""
-        return rotation.rotate_rows(self.rotation_rows, self.bodies.com_in_body.T).T
+        return self.frames[:, 10:13]
 
     def point_world(self, body_index, point_body):
         """World position of body-frame points: ``x + R (p - c)``, (K,) and (K, 3) -> (K, 3)."""
-        lever = (point_body - self.bodies.com_in_body[body_index]).T
-        turned = rotation.rotate_rows(self.rotation_rows[:, :, body_index], lever)
-        return self.y[body_index, POSITION] + turned.T
+        lever = point_body - self.bodies.com_in_body[body_index]
+        turned = Rotation.from_quat(self.y[body_index, ORIENTATION]).apply(lever)
+        return self.y[body_index, POSITION] + turned
 
     def point_velocity(self, body_index, point_world):
         """Velocity of material points: ``v + omega x (p - x)``, (K,), (K, 3) -> (K, 3)."""
-        lever = (point_world - self.y[body_index, POSITION]).T
-        spin = rotation.cross_rows(self.angular_velocity[body_index].T, lever)
-        return self.velocity[body_index] + spin.T
+        lever = point_world - self.y[body_index, POSITION]
+        return self.velocity[body_index] + np.cross(self.angular_velocity[body_index], lever)
 
     def body_frame_pose(self):
         """Origin (N, 3) and orientation (N, 4) of each body frame."""
-        return self.y[:, POSITION] - self.com_offset, self.y[:, ORIENTATION]
+        return self.frames[:, 0:3], self.frames[:, 3:7]
 
     def body_frame_twist(self):
         """Velocity of each body-frame origin and angular velocity, world axes, (N, 3) each."""
-        spin = rotation.cross_rows(self.angular_velocity.T, self.com_offset.T)
-        return self.velocity - spin.T, self.angular_velocity
+        return self.frames[:, 7:10], self.frames[:, 10:13]
 
     def kinetic_energy(self):
         """(N,) ``P.P / 2M + omega.L / 2``, J."""
-        y = self.y
-        translational = 0.5 * np.sum(y[:, LINEAR_MOMENTUM] ** 2, axis=1) / self.bodies.mass
-        rotational = 0.5 * np.sum(self.angular_velocity * y[:, ANGULAR_MOMENTUM], axis=1)
-        return translational + rotational
+        momentum, spin = self.y[:, LINEAR_MOMENTUM], self.y[:, ANGULAR_MOMENTUM]
+        translational = np.einsum('ni,ni->n', momentum, momentum) / self.bodies.mass
+        return 0.5 * (translational + np.einsum('ni,ni->n', self.angular_velocity, spin))

@@ -10,8 +10,8 @@ point with a rest length). The effect itself is :mod:`rigid_sim.core.effects.spr
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import rotation
 from rigid_sim.core.scene_fields import ABSENT, Mistake, non_negative, REQUIRED, token, vector
 
 ZERO = [0.0, 0.0, 0.0]
@@ -58,8 +58,8 @@ def _spring(spring, key, names):
 
 def _end_in_world(body, point):
     """(3,) world position of body-frame ``point`` of ``body`` (a BodySpec) at the start."""
-    return body.origin + rotation.rotate(rotation.to_matrix(body.orientation[None]),
-                                         np.asarray(point, dtype=float)[None])[0]
+    turn = Rotation.from_quat(body.orientation)
+    return body.origin + turn.apply(np.asarray(point, dtype=float))
 
 
 def _check_ends_apart(spec, key, bodies):
