@@ -78,11 +78,6 @@ def failure_message(code, substeps, h):
     return f'orientation lost (quaternion overflowed) in {where}'
 
 
-def _same(key, other):
-    """Whether two keys hold the very same objects (states and integrators) or equal numbers."""
-    return all(a is b or (isinstance(a, (int, float)) and a == b) for a, b in zip(key, other))
-
-
 class StepController:
     """Plans, attempts, checks and records the steps of one world.
 
@@ -109,7 +104,7 @@ class StepController:
         self.auto_substep = bool(auto_substep)
         self.error_control = bool(error_control)
         self.diagnostics = StepDiagnostics()
-        self._next_plan = None   # the bound plan the end check made: (key, count, why)
+        self._next_plan = None   # the end check's plan: (y, dt, version, integrator, count, why)
         self._ended = None       # (state, inputs version, integrator) the last step ended at
 
     def restart(self):
@@ -123,8 +118,9 @@ class StepController:
         ``effects`` are the parameters to sum, ``version`` the inputs' version (a change
         means the wrenches changed). ``y`` is never written.
         """
-        continuing = (self._ended is not None
-                      and _same(self._ended, (y, version, self.integrator)))
+        ended = self._ended
+        continuing = (ended is not None and ended[0] is y and ended[1] == version
+                      and ended[2] is self.integrator)
         substeps, why = self._plan(y, dt, version, continuing)
         if not self._attempt(y, into, time, dt, substeps, effects, continuing):
             return self._record(None, substeps, why, version)
@@ -157,16 +153,17 @@ class StepController:
         if not self.auto_substep:
             return 1, ''
         planned, self._next_plan = self._next_plan, None   # good for one step only
-        if planned is not None and _same(planned[0], (y, dt, version, self.integrator)):
-            return planned[1], planned[2]
+        if (planned is not None and planned[0] is y and planned[1] == dt
+                and planned[2] == version and planned[3] is self.integrator):
+            return planned[4], planned[5]
         return self.guard.plan(self.integrator, y, dt, self.diagnostics.substeps)
 
     def _error_plan(self, dt):
         """Substeps the last step's estimate predicts for this one (0: no prediction)."""
-        integrator = self.integrator
         estimate = self.diagnostics.error_estimate
-        if not self.error_control or integrator.adaptive or not 0.0 < estimate < math.inf:
+        if not (self.error_control and 0.0 < estimate < math.inf) or self.integrator.adaptive:
             return 0
+        integrator = self.integrator
         held = self.diagnostics.substeps
         need = held * (estimate / (ERROR_TARGET * self.tolerance)) ** (
             1.0 / integrator.estimate_order)
@@ -202,7 +199,7 @@ class StepController:
             if grown > substeps:
                 return grown, why._replace(reached=True)
             # The plan a step of dt from y will make, unless y or the inputs change.
-            self._next_plan = ((y, dt, version, self.integrator), grown, why)
+            self._next_plan = (y, dt, version, self.integrator, grown, why)
         estimate = self.integrator.largest_error
         if (self.error_control and not self.integrator.adaptive
                 and self.tolerance < estimate < math.inf and substeps < safeguards.MAX_SUBSTEPS):
