@@ -333,10 +333,14 @@ def report(bare, control, keys, methods, plot_link, seconds, samples=SAMPLES):
         '## Error estimates', f'Command: `{bench.command_line()}`',
         '\n'.join(bench.machine_description() + [f'- CPU time of the whole run: {seconds:.0f} s']),
         '### Estimate / true local error, bare methods',
-        f'Median [min, max] over up to {samples} sampled ticks of each run (both clamped at '
-        f'{FLOOR:g}; ticks where both are below it left out). **UNDER**: some tick\'s estimate '
-        f'is more than {FACTOR:g} times below the truth; over: more than {FACTOR:g} times '
-        'above.', matrix(keys, methods, lambda m, k: ratio_cell(bare[m, k])),
+        f'Median [min, max] over up to {samples} sampled ticks of each run, the case\'s dt, '
+        'no substeps. Both errors are raised to the round-off floor, '
+        f'{FLOOR:g} or {ROUND_OFF_ULPS} units in the last place of the position in sizes, '
+        'whichever is larger; ticks where both are below it are left out. **UNDER**: some '
+        f'tick\'s estimate is more than {FACTOR:g} times below the truth; over: more than '
+        f'{FACTOR:g} times above. Reference: DOP853 (rtol {ORACLE_RTOL:g}) from the same '
+        'state over the same dt, its wrench the world\'s own effect sum.',
+        matrix(keys, methods, lambda m, k: ratio_cell(bare[m, k])),
         '### Silent underestimates (worst tick)', underestimates(bare)]
     for tolerance in TOLERANCES:
         parts += [f'### Error control at tolerance {tolerance:g}: largest true error / '
@@ -351,7 +355,10 @@ def report(bare, control, keys, methods, plot_link, seconds, samples=SAMPLES):
     parts += ['### Error control: worst true error / tolerance per method, over the steps '
               'whose estimate was within the tolerance', control_summary(control, methods)]
     if plot_link:
-        parts += [f'![estimate against true error]({plot_link})']
+        parts += ['Estimate against true error of every sampled tick, a panel per family; '
+                  f'the band is a factor {FACTOR:g} either way, points beyond 1e2 (diverged '
+                  'bare runs) lie off the axes.',
+                  f'![estimate against true error]({plot_link})']
     return '\n\n'.join(parts)
 
 
