@@ -2,9 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Benchmarks behind the ``rigid_sim_bench`` console script, and what they share.
 
-Subcommands: ``accuracy`` (:mod:`.accuracy`), ``inertia`` (:mod:`.inertia_cost`),
-``stability`` (:mod:`.stability`), ``throughput`` (:mod:`.throughput`), ``node``
-(:mod:`.node_rate`), ``imu`` (:mod:`.imu_cost`) and ``goals`` (:mod:`.goals`). CPU time
+Subcommands: ``accuracy`` (:mod:`.accuracy`), ``estimates`` (:mod:`.estimates`),
+``inertia`` (:mod:`.inertia_cost`), ``stability`` (:mod:`.stability`), ``throughput``
+(:mod:`.throughput`), ``node`` (:mod:`.node_rate`), ``imu`` (:mod:`.imu_cost`) and
+``goals`` (:mod:`.goals`). CPU time
 is ``time.process_time`` (this process's user + system time), so other load on the machine
 does not count against a method.
 """
