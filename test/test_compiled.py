@@ -54,11 +54,19 @@ def test_every_integrator_carries_its_own_step_bound():
 
 
 def test_an_integrator_without_its_own_step_bound_is_refused_at_registration():
-    """A method that forgets its bound is not registered: it would step unguarded."""
-    forgetful = type('Forgetful', (Integrator,), {'name': 'forgetful', 'order': 2})
+    """A method that forgets its bound or its estimate's order is not registered.
+
+    It would step unguarded, or error control could not predict its substeps.
+    """
+    forgetful = type('Forgetful', (Integrator,), {'name': 'forgetful', 'order': 2,
+                                                  'estimate_order': 2})
     with pytest.raises(TypeError, match='Forgetful declares no step bound'):
         registry(forgetful)
-    declared = type('Declared', (Integrator,), {'name': 'declared', 'bound': UNBOUNDED})
+    unordered = type('Unordered', (Integrator,), {'name': 'unordered', 'bound': UNBOUNDED})
+    with pytest.raises(TypeError, match='Unordered declares no estimate_order'):
+        registry(unordered)
+    declared = type('Declared', (Integrator,), {'name': 'declared', 'bound': UNBOUNDED,
+                                                'estimate_order': 2})
     assert registry(declared) == {'declared': declared}
 
 

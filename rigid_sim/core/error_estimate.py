@@ -61,6 +61,17 @@ def store_scales(y, model, dt, scales):
 
 
 @helper
+def turning_part(dq, q):
+    """Return the part of a quaternion error ``dq`` that turns the unit ``q``: dq - (dq.q) q.
+
+    The rest changes only its length, which every step's normalisation takes away.
+    """
+    along = dq[0] * q[0] + dq[1] * q[1] + dq[2] * q[2] + dq[3] * q[3]
+    return (dq[0] - along * q[0], dq[1] - along * q[1], dq[2] - along * q[2],
+            dq[3] - along * q[3])
+
+
+@helper
 def scaled_size(dx, dq, dp, dl, scales):
     """Largest component of the error (``dx``, ``dq``, ``dp``, ``dl`` tuples) over its scale."""
     length, momentum, angular = scales

@@ -21,7 +21,8 @@ from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
-from rigid_sim.core.error_estimate import body_scales, scaled_size, store_scales
+from rigid_sim.core.error_estimate import (body_scales, scaled_size, store_scales,
+                                           turning_part)
 from rigid_sim.core.integrators.base import Integrator
 
 
@@ -195,7 +196,8 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
             slope = (_stored_slope(fsal, i) if stage == 0
                      else _slope(world, momentum, model, force, torque, body_axes, i))
             _add_slope(y, i, h * b[stage], slope)
-            _add_slope(estimate, i, h * e[stage], slope)
+            if e[stage] != 0.0:
+                _add_slope(estimate, i, h * e[stage], slope)
             if stage == 1:
                 rates[i] = _step_rate(_stored_slope(fsal, i), slope, a[1])
             if stage + 1 < b.size:
@@ -229,8 +231,8 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
         slope = _stored_slope(fsal, i)
         _add_slope(estimate, i, weight, slope)
         dx, dq, dp, dl = _stored_slope(estimate, i)
-        error[i] += _own_error(scaled_size(dx, dq, dp, dl, kin.vector(scales, i, 0)),
-                               rate_weight, rates[i])
+        error[i] += _own_error(scaled_size(dx, turning_part(dq, kin.orientation(y, i)), dp, dl,
+                                           kin.vector(scales, i, 0)), rate_weight, rates[i])
 
 
 @helper
@@ -336,9 +338,9 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
         inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
         scales = body_scales(model, i, p, big_l, h * substeps)
         slope = _stored_slope(fsal, i)   # the first slope: the last step's end
+        angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         total = 0.0
         for k in range(substeps):
-            angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
             start, first_slope, rate = (x, q, p, angular), slope, 0.0
             (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
                                                        h * e[0])
@@ -356,10 +358,10 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
                     at = time + k * h + c[stage] * h
                 else:   # the end, as the next substep starts from it
                     q = kin.normalize(q)
-                    big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
+                    r = kin.matrix(q)
+                    big_l = kin.rotate(r, angular) if body_axes else angular
                     stage_x, stage_q, stage_p, stage_l = x, q, p, big_l
-                    stage_angular = (kin.rotate_inverse(kin.matrix(q), big_l) if body_axes
-                                     else big_l)
+                    stage_angular = kin.rotate_inverse(r, big_l) if body_axes else big_l
                     at = time + (k + 1) * h
                 force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
                                             model)
@@ -370,8 +372,10 @@ def _runge_kutta_per_body(y, model, effects, time, h, substeps, method, body_axe
                         (x, q, p, angular), estimate, slope, h * b[stage], h * e[stage])
                 if stage == 1 and stage < b.size:
                     rate = _step_rate(first_slope, slope, a[1])
+            angular = stage_angular   # the end's internal momentum, where the next starts
             dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
-            total += _own_error(scaled_size(dx, dq, dp, dl, scales), rate_weight, rate)
+            total += _own_error(scaled_size(dx, turning_part(dq, q), dp, dl, scales),
+                                rate_weight, rate)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
                 first, total = kin.earlier_failure(first, code, k + 1), math.inf
@@ -398,7 +402,9 @@ def _start_slopes_per_body(y, model, effects, time, body_axes, fsal):
 @helper
 def _take_slope(sums, estimate, slope, weight, estimate_weight):
     """Return the step's sums and estimate (slope tuples) with ``slope`` added, weighted."""
-    return _plus_slope(sums, weight, slope), _plus_slope(estimate, estimate_weight, slope)
+    if estimate_weight != 0.0:   # most of a tableau's stages are not in its estimate
+        estimate = _plus_slope(estimate, estimate_weight, slope)
+    return _plus_slope(sums, weight, slope), estimate
 
 
 _NO_SLOPE = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
