@@ -284,7 +284,7 @@ def test_a_step_that_loses_the_orientation_is_rejected():
     zeros: finite, but no rotation. Every quaternion the World keeps is a unit one.
     """
     world = accuracy_cases.CASES_BY_KEY['tumbling'].build('rk4_world')
-    assert not world.auto_substep   # nothing but the retry stands between q and overflow
+    assert not world.control.auto_substep   # nothing but the retry stands between q and overflow
     world.step(20.0)
     np.testing.assert_allclose(np.linalg.norm(world.y[:, ORIENTATION], axis=1), 1.0,
                                rtol=1e-12)

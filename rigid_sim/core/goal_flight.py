@@ -125,7 +125,7 @@ class Flight:
 
     def plan_from(self, world, y):
         """Plan every step as the world's guard would plan the first one from state ``y``."""
-        if not world.auto_substep:
+        if not world.control.auto_substep:
             return
         guard = safeguards.StepGuard(world.bodies, world.effects, self.held)
         substeps, _ = guard.plan(world.integrator, y, self.dt, world.diagnostics.substeps)
@@ -201,9 +201,11 @@ def snapshot(world, y=None, held=None):
     integrator and held wrenches (``held``, default the world's); the bodies and the
     effects' parameters, which stepping never changes, are shared.
     """
+    control = world.control
     copied = World(world.bodies, world.y if y is None else y, world.effects,
-                   world.integrator.name, world.integrator.tolerance, world.auto_substep,
-                   inputs=copy_held(world.inputs if held is None else held, world.bodies))
+                   world.integrator.name, control.tolerance, control.auto_substep,
+                   inputs=copy_held(world.inputs if held is None else held, world.bodies),
+                   error_control=control.error_control)
     copied.time = world.time
     copied.diagnostics.substeps = world.diagnostics.substeps
     return copied

@@ -186,7 +186,7 @@ def carry_over(old, new, kept):
     new.initial[after] = old.initial[before]
     new.y = y
     new.time = old.time
-    new.diagnostics = old.diagnostics
+    new.control.diagnostics = old.control.diagnostics
     moved = dict(zip(before.tolist(), after.tolist()))
     com = old.bodies.com_in_body
     for (body, key), held in old.inputs.held.items():

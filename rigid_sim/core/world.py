@@ -81,18 +81,9 @@ class World:
         self.control.integrator = integrator
 
     @property
-    def auto_substep(self):
-        """Whether steps are split by the integrator's bounds."""
-        return self.control.auto_substep
-
-    @property
     def diagnostics(self):
         """Return what the step controller did (a :class:`~step_control.StepDiagnostics`)."""
         return self.control.diagnostics
-
-    @diagnostics.setter
-    def diagnostics(self, diagnostics):
-        self.control.diagnostics = diagnostics
 
     @property
     def y(self):
