@@ -4,6 +4,7 @@
 import math
 
 from rigid_sim.bench import cli
+from rigid_sim.bench.body_threads import METHODS
 from rigid_sim.bench.throughput import GUARDED, QUICK
 from rigid_sim.core.integrators import REGISTRY
 
@@ -21,7 +22,8 @@ def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
 
     So have MuJoCo's Euler and RK4, installed with the test extra; each effect's cost is listed;
     the world without effects made no call into effect code; the Markdown section and the plot
-    are written, keeping hand-written text around the section.
+    are written, keeping hand-written text around the section; the wall-clock table has each
+    method in one call and on threads, and MuJoCo RK4 with its ratios.
     """
     out = tmp_path / 'performance.md'
     out.write_text('# Hand-written title\n')
@@ -39,6 +41,13 @@ def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
     effects = table_rows(printed, 'of each effect')
     assert set(effects) == {'gravity', 'damping', 'springs', 'wrench'}
     assert 'made 0 calls into' in printed
+    walls = table_rows(printed, 'Wall time per body-step')
+    assert set(walls) == {f'{name}, {kind}' for name in METHODS
+                          for kind in ('one thread', 'threads')} | {'mujoco RK4'}
+    for name, cells in walls.items():
+        assert len(cells) == len(QUICK['thread_sizes'])
+        assert all(0.0 < float(cell) < math.inf for cell in cells), name
+    assert set(table_rows(printed, 'MuJoCo RK4 wall time')) == set(walls) - {'mujoco RK4'}
     written = out.read_text()
     assert written.startswith('# Hand-written title')
     assert table_rows(written, 'CPU time per body-step') == per_body_step

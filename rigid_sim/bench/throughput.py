@@ -12,12 +12,14 @@ Kernels are compiled (or loaded from numba's cache) before any timing.
 import cProfile
 import functools
 import pstats
+import time
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_sim import bench
+from rigid_sim.bench import body_threads
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
@@ -37,7 +39,8 @@ RUN_SECONDS = 0.25             # CPU s per timed run at most (slow methods take 
 CALIBRATION_STEPS = 3          # untimed steps that estimate the cost of one
 REPEATS = 5
 EFFECT_SIZE = 1000
-QUICK = dict(sizes=(1, 10), work=20, repeats=5, effect_size=10)
+QUICK = dict(sizes=(1, 10), work=20, repeats=5, effect_size=10,
+             thread_sizes=body_threads.QUICK_SIZES)
 SECTION = 'rigid_sim_bench throughput'
 # Rows that add the World's step-size guard: row name -> integrator (exact_split: the default).
 GUARDED = {f'{name}, World auto_substep on': name for name in ('rk4', 'exact_split')}
@@ -94,29 +97,29 @@ def effects_of(n, kinds):
     return tuple(built)
 
 
-def rigid_sim_time(n, integrator, work, repeats, auto_substep=False):
+def rigid_sim_time(n, integrator, work, repeats, auto_substep=False, clock=time.process_time):
     """Median CPU seconds per ``World.step`` of N bodies with ``integrator``.
 
     ``auto_substep`` off times the integrator itself; on adds the World's step-size guard.
+    ``clock``: ``time.perf_counter`` for wall seconds.
     """
     def prepare():
         bodies, y = bodies_and_state(n)
         world = World(bodies, y, effects_of(n, 'gravity'), integrator,
-                      auto_substep=auto_substep, inputs=held_wrenches(n),
-                      error_control=auto_substep)
+                      auto_substep=auto_substep, inputs=held_wrenches(n))
         return lambda: [world.step(DT) for _ in range(steps)]
 
     steps = 1
     prepare()()   # compiles the kernels (or loads them from numba's cache): not timed
     steps = CALIBRATION_STEPS
-    calibration, _ = bench.median_cpu_time(prepare, 1)
+    calibration, _ = bench.median_cpu_time(prepare, 1, clock=clock)
     per_step = max(calibration / steps, 1e-9)
     steps = int(max(CALIBRATION_STEPS, min(work // n, RUN_SECONDS / per_step)))
-    return bench.median_cpu_time(prepare, repeats)[0] / steps
+    return bench.median_cpu_time(prepare, repeats, clock=clock)[0] / steps
 
 
-def mujoco_time(n, integrator, work, repeats):
-    """Median CPU seconds per step of N free MuJoCo bodies (gravity, constant xfrc_applied)."""
+def mujoco_time(n, integrator, work, repeats, clock=time.process_time):
+    """Median ``clock`` seconds per step of N free MuJoCo bodies (gravity, xfrc_applied)."""
     import mujoco
     steps = max(3, work // n)
     inertia = ' '.join(map(str, MOMENTS))
@@ -131,7 +134,7 @@ def mujoco_time(n, integrator, work, repeats):
         # Body 0 is the world; xfrc_applied is world-axes force then torque at the com.
         data.xfrc_applied[1:] = np.concatenate((FORCE, TORQUE))
         return lambda: mujoco.mj_step(model, data, nstep=steps)
-    return bench.median_cpu_time(prepare, repeats)[0] / steps
+    return bench.median_cpu_time(prepare, repeats, clock=clock)[0] / steps
 
 
 def effect_costs(n, repeats):
@@ -226,8 +229,11 @@ def plot(results, sizes, path):
     pyplot.close(figure)
 
 
-def report(results, sizes, costs, effect_size, idle_calls, versions, plot_link):
-    """Return the Markdown section: setup, body-step table, ratios, effect costs, idle proof."""
+def report(results, sizes, costs, effect_size, idle_calls, versions, plot_link, walls):
+    """Return the Markdown section: setup, body-step table, ratios, effect costs, idle proof.
+
+    ``walls``: the wall-clock table of one thread against threads (:mod:`.body_threads`).
+    """
     effect_rows = [[kind, f'{1e6 * cost:.3g}', f'{1e9 * cost / effect_size:.3g}']
                    for kind, cost in costs.items()]
     parts = ['### Setup', *bench.machine_description(versions),
@@ -240,7 +246,7 @@ def report(results, sizes, costs, effect_size, idle_calls, versions, plot_link):
              bench.markdown_table(['effect', 'us per call', 'ns per body'], effect_rows),
              '', '### An unlisted effect costs nothing',
              f'A world with no effects, stepped 5 times with rk4, made {idle_calls} calls '
-             'into `rigid_sim/core/effects` (cProfile).']
+             'into `rigid_sim/core/effects` (cProfile).', '', walls]
     if plot_link is not None:
         parts += ['', f'![us per body-step against N]({plot_link})']
     return '\n'.join(parts)
@@ -251,6 +257,8 @@ def add_arguments(parser):
     parser.add_argument('--quick', action='store_true',
                         help='tiny configuration (N = 1, 10; few steps) for tests')
     parser.add_argument('--sizes', type=int, nargs='+', help=f'body counts (default {SIZES})')
+    parser.add_argument('--thread-sizes', type=int, nargs='+',
+                        help=f'body counts of the wall-clock table (default {body_threads.SIZES})')
     parser.add_argument('--repeats', type=int, default=REPEATS, help='timed runs per setting')
     parser.add_argument('--no-mujoco', action='store_true', help='skip the MuJoCo columns')
     parser.add_argument('--out', type=Path, help='Markdown file whose section is (re)written')
@@ -260,7 +268,8 @@ def add_arguments(parser):
 def main(args):
     """Run the benchmark, print the Markdown report, write ``--out`` and the plot."""
     quick = QUICK if args.quick else dict(sizes=SIZES, work=WORK, repeats=args.repeats,
-                                          effect_size=EFFECT_SIZE)
+                                          effect_size=EFFECT_SIZE,
+                                          thread_sizes=body_threads.SIZES)
     sizes = tuple(args.sizes or quick['sizes'])
     versions = []
     try:
@@ -268,8 +277,12 @@ def main(args):
         versions.append(f'mujoco {mujoco.__version__}')
     except ImportError:   # optional: the table then has no MuJoCo rows
         mujoco = None
-    results = sweep(sizes, quick['work'], quick['repeats'],
-                    mujoco is not None and not args.no_mujoco)
+    with body_threads.threads_from(body_threads.NEVER):   # CPU time: one thread's
+        results = sweep(sizes, quick['work'], quick['repeats'],
+                        mujoco is not None and not args.no_mujoco)
+    thread_sizes = tuple(args.thread_sizes or quick['thread_sizes'])
+    walls = body_threads.wall_sweep(thread_sizes, quick['work'], quick['repeats'],
+                                    mujoco is not None and not args.no_mujoco)
     costs = effect_costs(quick['effect_size'], quick['repeats'])
     idle_calls = effect_calls_without_effects(quick['effect_size'])
     plot_path = args.plot or (args.out.parent / 'performance.png' if args.out else None)
@@ -278,7 +291,8 @@ def main(args):
         plot_path.parent.mkdir(parents=True, exist_ok=True)
         plot(results, sizes, plot_path)
         link = plot_path.name if args.out and plot_path.parent == args.out.parent else plot_path
-    text = report(results, sizes, costs, quick['effect_size'], idle_calls, versions, link)
+    text = report(results, sizes, costs, quick['effect_size'], idle_calls, versions, link,
+                  body_threads.wall_report(walls, thread_sizes))
     print(text)
     if args.out is not None:
         bench.write_section(args.out, SECTION, text)
