@@ -11,6 +11,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from physics_cases import FIXED_STEP
+from rigid_sim.core import step_control
 from rigid_sim.core.effects.springs import Springs, SpringSpec
 from rigid_sim.core.error_estimate import true_errors
 from rigid_sim.core.integrators import REGISTRY
@@ -183,3 +184,16 @@ def test_error_control_gives_substeps_back():
         world.step(0.05)
     assert world.diagnostics.substeps < fast
     assert world.diagnostics.error_estimate <= 1e-8
+
+
+def test_error_control_work_is_capped(monkeypatch):
+    """A tolerance out of reach splits a step into at most ERROR_WORK / N substeps.
+
+    The step is kept (its estimate above the tolerance) and the reason says it was capped.
+    """
+    monkeypatch.setattr(step_control, 'ERROR_WORK', 20)
+    world = oscillator('rk4', error_control=True, tolerance=1e-12)
+    assert world.step(0.2)
+    assert world.diagnostics.substeps == 20
+    assert world.diagnostics.error_estimate > 1e-12
+    assert 'capped at 20 substeps' in world.diagnostics.reason

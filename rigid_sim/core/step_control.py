@@ -26,6 +26,11 @@ from rigid_sim.core import safeguards
 
 # A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
 MAX_HALVINGS = 4
+# Error control splits a step into at most this many body-substeps (substeps times bodies,
+# and never more than safeguards.MAX_SUBSTEPS substeps): about 0.2 s of rk4 or 0.7 s of
+# exact_split on this machine, so that a tolerance set very small on a large scene leaves a
+# tick long but bounded; the reason then says it was capped.
+ERROR_WORK = 1_000_000
 # A step is redone at most this many times with the counts its end checks ask for; the
 # estimate's prediction is good to a few percent in smooth motion, so one redo is the rule.
 MAX_REDOS = 3
@@ -63,13 +68,13 @@ class ErrorReason(NamedTuple):
     tolerance: float
     method: str          # the integrator's name
     substeps: int        # the count taken
-    capped: bool         # more were needed than safeguards.MAX_SUBSTEPS
+    capped: bool         # more were needed than the cap (the count taken)
 
     def __str__(self):
         words = (f'error: estimate {self.estimate:.3g} against tolerance {self.tolerance:.3g} '
                  f'needs {self.substeps} {self.method} substeps')
         if self.capped:
-            words = f'{words}; capped at {safeguards.MAX_SUBSTEPS} substeps'
+            words = f'{words}; capped at {self.substeps} substeps (ERROR_WORK)'
         return words
 
 
@@ -98,10 +103,13 @@ class StepController:
     error_control : bool
         Split steps by the error estimate; False keeps the count the bounds give (fixed-step
         studies). Adaptive methods control their error themselves either way.
+    bodies : int
+        How many bodies a step advances: error control's cap is :data:`ERROR_WORK` over it.
     """
 
-    def __init__(self, guard, integrator, tolerance, auto_substep, error_control):
+    def __init__(self, guard, integrator, tolerance, auto_substep, error_control, bodies=1):
         self.guard = guard
+        self._error_cap = max(1, min(safeguards.MAX_SUBSTEPS, ERROR_WORK // bodies))
         self.integrator = integrator
         self.tolerance = float(tolerance)
         self.auto_substep = bool(auto_substep)
@@ -142,8 +150,8 @@ class StepController:
         substeps, why = self._bound_plan(y, dt, version)
         wanted = self._error_plan(dt) if continuing else 0
         if wanted > substeps:
-            capped = wanted > safeguards.MAX_SUBSTEPS
-            substeps = min(wanted, safeguards.MAX_SUBSTEPS)
+            capped = wanted > self._error_cap
+            substeps = min(wanted, self._error_cap)
             why = ErrorReason(self.diagnostics.error_estimate, self.tolerance,
                               self.integrator.name, substeps, capped)
         return substeps, why
@@ -205,12 +213,12 @@ class StepController:
             self._next_plan = (y, dt, version, self.integrator, grown, why)
         estimate = self.integrator.largest_error
         if (self.error_control and not self.integrator.adaptive
-                and self.tolerance < estimate < math.inf and substeps < safeguards.MAX_SUBSTEPS):
+                and self.tolerance < estimate < math.inf and substeps < self._error_cap):
             need = substeps * (estimate / (ERROR_TARGET * self.tolerance)) ** (
                 1.0 / self.integrator.estimate_order)
-            wanted = min(max(substeps + 1, math.ceil(need)), safeguards.MAX_SUBSTEPS)
+            wanted = min(max(substeps + 1, math.ceil(need)), self._error_cap)
             return wanted, ErrorReason(estimate, self.tolerance, self.integrator.name, wanted,
-                                       need > safeguards.MAX_SUBSTEPS)
+                                       need > self._error_cap)
         return None
 
     def _record(self, y, substeps, why, version):

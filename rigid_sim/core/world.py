@@ -68,7 +68,7 @@ class World:
         self.control = StepController(
             safeguards.StepGuard(bodies, self.effects, self.inputs),
             make_integrator(integrator, self, tolerance), tolerance, auto_substep,
-            error_control)
+            error_control, bodies.count)
         self._restart()   # keeps wrenches the inputs were given before the world was built
 
     @property

@@ -127,10 +127,8 @@ class Dopri5(Integrator):
         solver = self._stepper(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
                                atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
-        self.last_substeps = 0
         while solver.status == 'running':
             message = solver.step()
-            self.last_substeps += 1
             if solver.status == 'failed':
                 raise FloatingPointError(f'dopri5 failed: {message}')
             # The embedded pair's difference, as the stepper forms it (K: its stages, E: the

@@ -40,7 +40,6 @@ class Integrator:
         self.bodies = system.bodies
         self.tolerance = float(tolerance)
         self.evaluations = 0     # wrench evaluations since construction
-        self.last_substeps = 1   # internal steps the last call took (adaptive methods)
         count = self.bodies.count
         self.error = np.zeros(count)   # (N,) local error estimate of the last call, per body
         self.largest_error = 0.0       # its largest
