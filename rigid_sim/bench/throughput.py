@@ -100,13 +100,15 @@ def effects_of(n, kinds):
 def rigid_sim_time(n, integrator, work, repeats, auto_substep=False, clock=time.process_time):
     """Median CPU seconds per ``World.step`` of N bodies with ``integrator``.
 
-    ``auto_substep`` off times the integrator itself; on adds the World's step-size guard.
-    ``clock``: ``time.perf_counter`` for wall seconds.
+    ``auto_substep`` off times the integrator itself (its error estimate included); on adds
+    the World's step-size guard and error control. ``clock``: ``time.perf_counter`` for wall
+    seconds.
     """
     def prepare():
         bodies, y = bodies_and_state(n)
         world = World(bodies, y, effects_of(n, 'gravity'), integrator,
-                      auto_substep=auto_substep, inputs=held_wrenches(n))
+                      auto_substep=auto_substep, inputs=held_wrenches(n),
+                      error_control=auto_substep)
         return lambda: [world.step(DT) for _ in range(steps)]
 
     steps = 1
