@@ -242,23 +242,22 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
 
 
 @helper
-def _ratio(change, slope):
-    """``|change| / |slope|`` of two tuples (0 when both are 0, inf when only the slope is)."""
-    size, moved = 0.0, 0.0
-    for k in range(len(slope)):
-        size += slope[k] * slope[k]
-        moved += change[k] * change[k]
-    if moved == 0.0:
-        return 0.0
-    return math.sqrt(moved / size) if size > 0.0 else math.inf
+def _squares(v):
+    """Sum of the squares of a tuple's components."""
+    total = 0.0
+    for k in range(len(v)):
+        total += v[k] * v[k]
+    return total
 
 
 @helper
-def _pair(coordinate, momentum):
-    """Return the rate of a coordinate and its momentum from their ratios (:func:`_step_rate`)."""
-    if coordinate > 0.0 and momentum > 0.0:
-        return math.sqrt(coordinate * momentum)
-    return max(coordinate, momentum)
+def _squared_ratio(change, slope):
+    """``|change|^2 / |slope|^2`` of two tuples (0 when both are 0, inf when only the slope is)."""
+    moved = _squares(change)
+    if moved == 0.0:
+        return 0.0
+    size = _squares(slope)
+    return moved / size if size > 0.0 else math.inf
 
 
 @helper
@@ -271,10 +270,17 @@ def _step_rate(first, second, a21):
     depends on both), so their geometric mean (the one that changes, when the other keeps
     still). Rotation: the quaternion turns at ``|omega|`` whatever the phase, and the
     angular momentum at its own rate; the larger. The larger of translation and rotation.
+    Squared ratios throughout: two square roots in all.
     """
     change = _plus_slope(second, -1.0, first)
-    rate = max(_pair(_ratio(change[0], first[0]), _ratio(change[2], first[2])),
-               _ratio(change[1], first[1]), _ratio(change[3], first[3])) / a21
+    position = _squared_ratio(change[0], first[0])
+    momentum = _squared_ratio(change[2], first[2])
+    if position > 0.0 and momentum > 0.0:
+        translation = math.sqrt(position * momentum)
+    else:
+        translation = max(position, momentum)
+    rotation = max(_squared_ratio(change[1], first[1]), _squared_ratio(change[3], first[3]))
+    rate = math.sqrt(max(translation, rotation)) / a21
     return rate if math.isfinite(rate) else 0.0
 
 
