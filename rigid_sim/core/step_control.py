@@ -127,28 +127,40 @@ class StepController:
         """Advance ``y`` by ``dt`` into the array ``into``; ``into``, or None if given up.
 
         ``effects`` are the parameters to sum, ``version`` the inputs' version (a change
-        means the wrenches changed). ``y`` is never written.
+        means the wrenches changed). ``y`` is never written. The common step (planned as
+        the last one ended, one attempt, nothing to redo) makes few Python calls: at one
+        body they are most of a step.
         """
-        ended = self._ended
+        ended, integrator = self._ended, self.integrator
         continuing = (ended is not None and ended[0] is y and ended[1] == version
-                      and ended[2] is self.integrator)
+                      and ended[2] is integrator)
         substeps, why = self._plan(y, dt, version, continuing)
-        if not self._attempt(y, into, time, dt, substeps, effects, continuing):
+        failed = self._attempt(y, into, time, dt, substeps, effects, continuing)
+        if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
             return self._record(None, substeps, why, version)
-        for _ in range(MAX_REDOS):
-            redo = self._check_end(into, dt, substeps, version)
-            if redo is None:
-                break
-            substeps, why = redo
-            self.diagnostics.redone_steps += 1
-            if not self._attempt(y, into, time, dt, substeps, effects, False):
-                return self._record(None, substeps, why, version)
+        if self.auto_substep or (self.error_control
+                                 and integrator.largest_error > self.tolerance):
+            for _ in range(MAX_REDOS):
+                redo = self._check_end(into, dt, substeps, version)
+                if redo is None:
+                    break
+                substeps, why = redo
+                self.diagnostics.redone_steps += 1
+                failed = self._attempt(y, into, time, dt, substeps, effects, False)
+                if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
+                    return self._record(None, substeps, why, version)
         return self._record(into, substeps, why, version)
 
     def _plan(self, y, dt, version, continuing):
         """Substeps and why for a step of ``dt`` from ``y``: the bounds', or the error's."""
-        substeps, why = self._bound_plan(y, dt, version)
-        wanted = self._error_plan(dt) if continuing else 0
+        substeps, why = self._bound_plan(y, dt, version) if self.auto_substep else (1, '')
+        diagnostics = self.diagnostics
+        # Nothing to predict unless the last step was split or its estimate was near the aim.
+        if not (continuing and self.error_control
+                and (diagnostics.substeps > 1
+                     or diagnostics.error_estimate > ERROR_TARGET * self.tolerance)):
+            return substeps, why
+        wanted = self._error_plan(dt)
         if wanted > substeps:
             capped = wanted > self._error_cap
             substeps = min(wanted, self._error_cap)
@@ -161,8 +173,6 @@ class StepController:
 
         It read the state, ``dt``, the inputs held, the integrator and the count kept.
         """
-        if not self.auto_substep:
-            return 1, ''
         planned, self._next_plan = self._next_plan, None   # good for one step only
         if (planned is not None and planned[0] is y and planned[1] == dt
                 and planned[2] == version and planned[3] is self.integrator):
@@ -183,21 +193,33 @@ class StepController:
         return max(1, math.ceil(need))
 
     def _attempt(self, y, into, time, dt, substeps, effects, continuing):
-        """Step ``y`` by ``dt`` into ``into``, halving on a non-finite state; False if all fail."""
-        for halving in range(MAX_HALVINGS + 1):
-            pieces = substeps << halving
-            into[...] = y
-            try:
-                code = self.integrator.advance(into, time, dt, pieces, effects,
-                                               continuing and halving == 0)
-                failure = failure_message(code, pieces, dt / pieces) if code else ''
-            except ArithmeticError as error:   # dopri5 raises when its step size collapses
-                failure = f'{type(error).__name__}: {error}'
-            if not failure:
+        """Step ``y`` by ``dt`` into ``into`` in ``substeps``: 0, a failure code or an error."""
+        into[...] = y
+        try:
+            return self.integrator.advance(into, time, dt, substeps, effects, continuing)
+        except ArithmeticError as error:   # dopri5 raises when its step size collapses
+            return error
+
+    def _retry(self, y, into, time, dt, substeps, effects, failed):
+        """Count the failed attempt and retry in 2, 4, ... times the pieces; False if all fail.
+
+        ``failed`` is what the attempt in ``substeps`` returned (a failure code or an error).
+        """
+        for halving in range(1, MAX_HALVINGS + 2):
+            pieces = substeps << (halving - 1)
+            self._fail(time, failure_message(failed, pieces, dt / pieces)
+                       if isinstance(failed, int) else f'{type(failed).__name__}: {failed}')
+            if halving > MAX_HALVINGS:
+                return False
+            failed = self._attempt(y, into, time, dt, substeps << halving, effects, False)
+            if not failed:
                 return True
-            self.diagnostics.rejected_steps += 1
-            self.diagnostics.last_failure = f't = {time:.6g} s: {failure}'
         return False
+
+    def _fail(self, time, failure):
+        """Count a rejected attempt and say what it met."""
+        self.diagnostics.rejected_steps += 1
+        self.diagnostics.last_failure = f't = {time:.6g} s: {failure}'
 
     def _check_end(self, y, dt, substeps, version):
         """(substeps, why) to redo the step with, or None to keep it.
