@@ -23,6 +23,7 @@ def _worlds(monkeypatch, name, damped):
     bodies, y, effects, wrenches = _per_body_scene(damped=damped)
     one = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     monkeypatch.setattr(dispatch, 'THREADED_BODIES', COUNT)
+    monkeypatch.setattr(dispatch, 'HEAVY_THREADED_BODIES', COUNT)
     monkeypatch.setattr(dispatch.config, 'NUMBA_NUM_THREADS', THREADS)
     shared = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
     assert isinstance(shared.integrator._kernel, dispatch.BodyThreads)
@@ -80,3 +81,15 @@ def test_small_scenes_and_one_thread_keep_one_call(monkeypatch):
                       dispatch.BodyThreads)
     monkeypatch.setattr(dispatch.config, 'NUMBA_NUM_THREADS', 1)
     assert dispatch.across_threads(call, threaded, 10 * dispatch.THREADED_BODIES) is call
+
+
+def test_splittings_share_their_bodies_from_fewer_of_them(monkeypatch):
+    """A splitting's body-step costs several Runge-Kutta ones: threads from 1000 bodies."""
+    call, threaded = object(), object()
+    monkeypatch.setattr(dispatch.config, 'NUMBA_NUM_THREADS', 2)
+    heavy = dispatch.HEAVY_THREADED_BODIES
+    assert heavy < dispatch.THREADED_BODIES
+    assert dispatch.across_threads(call, threaded, heavy - 1, heavy=True) is call
+    assert isinstance(dispatch.across_threads(call, threaded, heavy, heavy=True),
+                      dispatch.BodyThreads)
+    assert dispatch.across_threads(call, threaded, heavy) is call

@@ -36,6 +36,10 @@ class CompiledCall:
 # 1e5; exact_split 1.5x, 1.8x, 1.85x. With none free: 0.83x at 1000, 0.93-0.98x at 1e4,
 # 1.0x at 1e5 (docs/performance.md, "Bodies on threads").
 THREADED_BODIES = 10000
+# For the splittings, whose body-step is 5-10 times the Runge-Kutta one (the free flow, and
+# DLM's comparison with it): with a core free exact_split gains 1.4-1.5x at 1000 bodies
+# (docs/performance.md), where a node at 1 kHz has 1 ms for the whole tick.
+HEAVY_THREADED_BODIES = 1000
 
 
 @functools.lru_cache(maxsize=None)
@@ -75,12 +79,15 @@ class BodyThreads:
         return (min(failed, key=abs) if failed else 0), max(largest for _, largest in results)
 
 
-def across_threads(call, threaded, count):
+def across_threads(call, threaded, count, heavy=False):
     """``call`` for ``count`` bodies, or where threads pay :class:`BodyThreads` of ``threaded``.
+
+    ``heavy``: a body-step costs several times a Runge-Kutta one, so threads pay from
+    :data:`HEAVY_THREADED_BODIES` bodies on.
 
     The threads are as many as numba's (``NUMBA_NUM_THREADS``, by default the cores).
     """
     threads = config.NUMBA_NUM_THREADS
-    if count < THREADED_BODIES or threads < 2:
+    if count < (HEAVY_THREADED_BODIES if heavy else THREADED_BODIES) or threads < 2:
         return call
     return BodyThreads(threaded, count, threads)

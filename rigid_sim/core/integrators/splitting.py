@@ -421,7 +421,7 @@ class StrangSplitting(Integrator):
             np.zeros((count, 6)), np.empty((count, 13)), np.empty((count, 3)))
         self._kernel = CompiledCall(KERNELS[self.drift, per_body])
         if per_body:
-            self._kernel = across_threads(self._kernel, THREADED[self.drift], count)
+            self._kernel = across_threads(self._kernel, THREADED[self.drift], count, heavy=True)
 
     def _advance(self, y, time, h, substeps, effects, continuing):
         a, b = self._kick_tableau
