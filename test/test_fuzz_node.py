@@ -19,6 +19,7 @@ from std_srvs.srv import SetBool, Trigger
 import ros_tools
 from fuzzing import fuzz
 from rigid_sim.parameters import SPECS
+from rigid_sim.testing.simulation import PREPARATION_TIMEOUT
 
 MAX_FORCE, MAX_TORQUE = 100.0, 10.0
 SCENE = f"""
@@ -121,6 +122,9 @@ def test_random_parameter_sets_are_taken_or_refused_with_a_reason(rigid_sim, cha
         Parameter(name, value=value).to_parameter_msg() for name, value in changes])
     results = sim.call(SetParameters, 'set_parameters', request).results
     assert len(results) == len(changes)
+    # A scene, integrator or tolerance taken is prepared beside the running one (compiling,
+    # on a cold cache, for seconds) and swapped in: the settings say so once it is.
+    assert sim.node.reconfiguration.wait(PREPARATION_TIMEOUT)
     for (name, value), result in zip(changes, results):
         if result.successful:
             assert name in SPECS or name == 'use_sim_time'
