@@ -182,15 +182,21 @@ class StepController:
     def _error_plan(self, dt):
         """Substeps the last step's estimate predicts for this one (0: no prediction)."""
         estimate = self.diagnostics.error_estimate
-        if not (self.error_control and 0.0 < estimate < math.inf) or self.integrator.adaptive:
+        if not estimate < math.inf or self.integrator.adaptive:
             return 0
-        integrator = self.integrator
         held = self.diagnostics.substeps
-        need = held * (estimate / (ERROR_TARGET * self.tolerance)) ** (
-            1.0 / integrator.estimate_order)
+        need = self._need(held, estimate)
         if need <= held and need * safeguards.KEEP_MARGIN > held:
             return held   # not far enough below to give substeps back
         return max(1, math.ceil(need))
+
+    def _need(self, substeps, estimate):
+        """Substeps (a real number) that bring ``estimate``, made in ``substeps``, to the aim.
+
+        The estimate of a step falls as ``n^-estimate_order`` with ``n`` substeps.
+        """
+        return substeps * (estimate / (ERROR_TARGET * self.tolerance)) ** (
+            1.0 / self.integrator.estimate_order)
 
     def _attempt(self, y, into, time, dt, substeps, effects, continuing):
         """Step ``y`` by ``dt`` into ``into`` in ``substeps``: 0, a failure code or an error."""
@@ -205,20 +211,21 @@ class StepController:
 
         ``failed`` is what the attempt in ``substeps`` returned (a failure code or an error).
         """
-        for halving in range(1, MAX_HALVINGS + 2):
-            pieces = substeps << (halving - 1)
-            self._fail(time, failure_message(failed, pieces, dt / pieces)
-                       if isinstance(failed, int) else f'{type(failed).__name__}: {failed}')
-            if halving > MAX_HALVINGS:
-                return False
-            failed = self._attempt(y, into, time, dt, substeps << halving, effects, False)
+        pieces = substeps
+        for _ in range(MAX_HALVINGS):
+            self._fail(time, dt, pieces, failed)
+            pieces <<= 1
+            failed = self._attempt(y, into, time, dt, pieces, effects, False)
             if not failed:
                 return True
+        self._fail(time, dt, pieces, failed)
         return False
 
-    def _fail(self, time, failure):
-        """Count a rejected attempt and say what it met."""
+    def _fail(self, time, dt, pieces, failed):
+        """Count a rejected attempt in ``pieces`` and say what it met (a code or an error)."""
         self.diagnostics.rejected_steps += 1
+        failure = (failure_message(failed, pieces, dt / pieces) if isinstance(failed, int)
+                   else f'{type(failed).__name__}: {failed}')
         self.diagnostics.last_failure = f't = {time:.6g} s: {failure}'
 
     def _check_end(self, y, dt, substeps, version):
@@ -236,8 +243,7 @@ class StepController:
         estimate = self.integrator.largest_error
         if (self.error_control and not self.integrator.adaptive
                 and self.tolerance < estimate < math.inf and substeps < self._error_cap):
-            need = substeps * (estimate / (ERROR_TARGET * self.tolerance)) ** (
-                1.0 / self.integrator.estimate_order)
+            need = self._need(substeps, estimate)
             wanted = min(max(substeps + 1, math.ceil(need)), self._error_cap)
             return wanted, ErrorReason(estimate, self.tolerance, self.integrator.name, wanted,
                                        need > self._error_cap)
