@@ -199,13 +199,13 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
             accumulate(effects, world, time + c[stage] * h, model, force, torque)
         following = a[stage + 1] * h if stage + 1 < b.size else 0.0
         for i in range(y.shape[0]):
-            slope = (_stored_slope(fsal, i) if stage == 0
+            slope = (kin.body_state(fsal, i) if stage == 0
                      else _slope(world, momentum, model, force, torque, body_axes, i))
             _add_slope(y, i, h * b[stage], slope)
             if e[stage] != 0.0:
                 _add_slope(estimate, i, h * e[stage], slope)
             if stage == 1:
-                rates[i] = _step_rate(_stored_slope(fsal, i), slope, a[1])
+                rates[i] = _step_rate(kin.body_state(fsal, i), slope, a[1])
             if stage + 1 < b.size:
                 _set_stage(start, i, following, slope, world, momentum, body_axes)
     _to_public(y, body_axes)
@@ -220,7 +220,7 @@ def _start_slopes(y, work, model, effects, time, body_axes, fsal):
     kin.copy_columns(momentum, 0, start, 10, 3)
     accumulate(effects, world, time, model, force, torque)
     for i in range(y.shape[0]):
-        _store_slope(fsal, i, _slope(world, momentum, model, force, torque, body_axes, i))
+        kin.store_body(fsal, i, *_slope(world, momentum, model, force, torque, body_axes, i))
 
 
 @helper
@@ -234,9 +234,9 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
     estimate, scales, rates = work[5], work[6], work[7]
     _start_slopes(y, work, model, effects, time, body_axes, fsal)
     for i in range(y.shape[0]):
-        slope = _stored_slope(fsal, i)
+        slope = kin.body_state(fsal, i)
         _add_slope(estimate, i, weight, slope)
-        dx, dq, dp, dl = _stored_slope(estimate, i)
+        dx, dq, dp, dl = kin.body_state(estimate, i)
         error[i] += _own_error(scaled_size(dx, turning_part(dq, kin.orientation(y, i)), dp, dl,
                                            kin.vector(scales, i, 0)), rate_weight, rates[i])
 
@@ -295,25 +295,15 @@ def _own_error(difference, rate_weight, rate):
     return difference * min(1.0, rate_weight * rate)
 
 
-@helper
-def _stored_slope(a, i):
-    """Body ``i``'s slope (dx, dq, dP, dL tuples) from a (N, 13) array."""
-    return kin.vector(a, i, 0), kin.orientation(a, i), kin.vector(a, i, 7), kin.vector(a, i, 10)
-
-
-@helper
-def _store_slope(a, i, slope):
-    """Write body ``i``'s slope (dx, dq, dP, dL tuples) into a (N, 13) array."""
-    kin.store_body(a, i, slope[0], slope[1], slope[2], slope[3])
-
-
 @helper(inline='always')
 def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, error, fsal,
                  continuing):
     """``substeps`` steps of ``h`` of ``method`` on ``y`` in place; (failure code, largest).
 
     ``method`` is what :meth:`Tableau.method` returns; ``error`` (N,) receives each body's
-    estimate summed over the substeps, ``fsal`` (N, 13) the slopes at the end.
+    estimate summed over the substeps, ``fsal`` (N, 13) the slopes at the end. A slope
+    (dx, dq, dP, dL) has the state's layout, so it is read and written as a body's state
+    (``kin.body_state``, ``kin.store_body``).
     """
     scales = work[6]
     store_scales(y, model, h * substeps, scales)
@@ -353,7 +343,7 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
         x, q, p, big_l = kin.body_state(y, i)
         inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
         scales = body_scales(model, i, p, big_l, h * substeps)
-        slope = _stored_slope(fsal, i)   # the first slope: the last step's end
+        slope = kin.body_state(fsal, i)   # the first slope: the last step's end
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         total = 0.0
         for k in range(substeps):
@@ -397,7 +387,7 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
                 first, total = kin.earlier_failure(first, code, k + 1), math.inf
                 break
         kin.store_body(y, i, x, q, p, big_l)
-        _store_slope(fsal, i, slope)
+        kin.store_body(fsal, i, *slope)
         error[i] = total
         largest = max(largest, total)
     return first, largest
@@ -410,9 +400,9 @@ def _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, 
         x, q, p, big_l = kin.body_state(y, i)
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         force, torque = body_wrench(effects, i, x, q, p, big_l, time, model)
-        _store_slope(fsal, i, _derivative(q, p, angular, force, torque,
-                                          kin.entries(model.inertia_inv, i),
-                                          model.inverse_mass[i], body_axes))
+        slope = _derivative(q, p, angular, force, torque, kin.entries(model.inertia_inv, i),
+                            model.inverse_mass[i], body_axes)
+        kin.store_body(fsal, i, *slope)
 
 
 @helper
