@@ -72,6 +72,15 @@ def turning_part(dq, q):
 
 
 @helper
+def quaternion_error(angle, q):
+    """Return the error of the unit quaternion ``q`` turned by a small ``angle`` (world, rad).
+
+    ``(angle, 0) q / 2``, the first-order change of ``q``.
+    """
+    return kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0), q)
+
+
+@helper
 def scaled_size(dx, dq, dp, dl, scales):
     """Largest component of the error (``dx``, ``dq``, ``dp``, ``dl`` tuples) over its scale."""
     length, momentum, angular = scales

@@ -57,6 +57,12 @@ def plus_scaled(u, a, v):
 
 
 @helper
+def scaled(a, v):
+    """Return ``a v`` of a float ``a`` and a 3-tuple ``v``."""
+    return (a * v[0], a * v[1], a * v[2])
+
+
+@helper
 def plus_scaled4(u, a, v):
     """``u + a v`` of 4-tuples ``u``, ``v`` and a float ``a``."""
     return (u[0] + a * v[0], u[1] + a * v[1], u[2] + a * v[2], u[3] + a * v[3])

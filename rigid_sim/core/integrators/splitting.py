@@ -40,7 +40,8 @@ from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import across_threads, CompiledCall
 from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
-from rigid_sim.core.error_estimate import body_scales, scaled_size, store_scales
+from rigid_sim.core.error_estimate import (body_scales, quaternion_error, scaled_size,
+                                           store_scales)
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
@@ -126,11 +127,8 @@ def _kick_error(q, inverse_mass, inertia_inv, h, force, torque, force_before, to
     before; ``q`` the orientation between (4-tuple), ``inertia_inv`` the body's 9-tuple.
     """
     c = h * h / 6.0
-    position = (c * inverse_mass * (force[0] - force_before[0]),
-                c * inverse_mass * (force[1] - force_before[1]),
-                c * inverse_mass * (force[2] - force_before[2]))
-    turned = (c * (torque[0] - torque_before[0]), c * (torque[1] - torque_before[1]),
-              c * (torque[2] - torque_before[2]))
+    position = kin.scaled(c * inverse_mass, kin.plus_scaled(force, -1.0, force_before))
+    turned = kin.scaled(c, kin.plus_scaled(torque, -1.0, torque_before))
     return position, kin.angular_velocity(kin.matrix(q), inertia_inv, turned)
 
 
@@ -138,11 +136,10 @@ def _kick_error(q, inverse_mass, inertia_inv, h, force, torque, force_before, to
 def _substep_error(q, position, angle, drift_error, scales):
     """Scaled size of a substep's error: estimate terms added up over its kicks and drifts.
 
-    ``angle`` (world axes, rad) becomes the quaternion's error ``(angle, 0) q / 2``.
+    ``angle`` (world axes, rad) becomes the quaternion's error (:func:`quaternion_error`).
     """
-    turn = kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0), q)
-    return scaled_size(position, kin.plus_scaled4(turn, 1.0, drift_error[1]), (0.0, 0.0, 0.0),
-                       drift_error[0], scales)
+    turn = kin.plus_scaled4(quaternion_error(angle, q), 1.0, drift_error[1])
+    return scaled_size(position, turn, (0.0, 0.0, 0.0), drift_error[0], scales)
 
 
 @helper(inline='always')

@@ -10,7 +10,7 @@ from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
-from rigid_sim.core.error_estimate import scaled_size, store_scales
+from rigid_sim.core.error_estimate import quaternion_error, scaled_size, store_scales
 from rigid_sim.core.integrators.base import Integrator
 
 
@@ -31,11 +31,10 @@ def _kick_drift(y, model, force, torque, h, before, estimate):
         f, t, big_l = kin.vector(force, i, 0), kin.vector(torque, i, 0), kin.vector(y, i, 10)
         half = 0.5 * h * h
         spin = kin.angular_velocity(r, inertia_inv, big_l)
-        kin.store(estimate, i, 0, kin.plus_scaled((0.0, 0.0, 0.0), half * model.inverse_mass[i],
-                                                  f))
-        kin.store(estimate, i, 3, kin.angular_velocity(
-            r, inertia_inv, kin.plus_scaled((0.0, 0.0, 0.0), half, kin.add(t, kin.cross(
-                spin, big_l)))))
+        kin.store(estimate, i, 0, kin.scaled(half * model.inverse_mass[i], f))
+        gyroscopic = kin.add(t, kin.cross(spin, big_l))
+        kin.store(estimate, i, 3, kin.angular_velocity(r, inertia_inv,
+                                                       kin.scaled(half, gyroscopic)))
         kin.store(before, i, 0, f)
         kin.store(before, i, 3, t)
         for k in range(3):
@@ -57,15 +56,11 @@ def _add_errors(y, model, force, torque, h, before, estimate, scales, error):
     ``force`` and ``torque`` hold the wrench at the step's end, ``before`` at its start.
     """
     for i in range(y.shape[0]):
-        angle = kin.vector(estimate, i, 3)
-        turn = kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0),
-                            kin.orientation(y, i))
+        turn = quaternion_error(kin.vector(estimate, i, 3), kin.orientation(y, i))
         dp = kin.plus_scaled(kin.vector(force, i, 0), -1.0, kin.vector(before, i, 0))
         dl = kin.plus_scaled(kin.vector(torque, i, 0), -1.0, kin.vector(before, i, 3))
-        error[i] += scaled_size(kin.vector(estimate, i, 0), turn,
-                                kin.plus_scaled((0.0, 0.0, 0.0), 0.5 * h, dp),
-                                kin.plus_scaled((0.0, 0.0, 0.0), 0.5 * h, dl),
-                                kin.vector(scales, i, 0))
+        error[i] += scaled_size(kin.vector(estimate, i, 0), turn, kin.scaled(0.5 * h, dp),
+                                kin.scaled(0.5 * h, dl), kin.vector(scales, i, 0))
 
 
 @kernel
