@@ -24,6 +24,7 @@ from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.error_estimate import (body_scales, scaled_size, store_scales,
                                            turning_part)
 from rigid_sim.core.integrators.base import Integrator
+from rigid_sim.core.integrators.substeps import substeps_checked
 
 
 @dataclass(frozen=True)
@@ -310,14 +311,17 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, 
     error[:] = 0.0
     if not continuing:
         _start_slopes(y, work, model, effects, time, body_axes, fsal)
-    for k in range(substeps):
-        _runge_kutta_step(y, work, model, effects, time + k * h, h, method, body_axes, fsal)
-        code = kin.check_substep(y)
-        if code != 0:
-            return code * (k + 1), math.inf
-        _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], method[5],
-                    body_axes, fsal, error)
-    return 0, error.max()
+    code = substeps_checked(_runge_kutta_substep, y, substeps,
+                            (work, model, effects, time, h, method, body_axes, error, fsal))
+    return code, (math.inf if code != 0 else error.max())
+
+
+@helper
+def _runge_kutta_substep(y, k, work, model, effects, time, h, method, body_axes, error, fsal):
+    """Substep ``k`` of :func:`_runge_kutta`: a step of ``h`` from ``time + k h``, estimated."""
+    _runge_kutta_step(y, work, model, effects, time + k * h, h, method, body_axes, fsal)
+    _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], method[5],
+                body_axes, fsal, error)
 
 
 @helper(inline='always')

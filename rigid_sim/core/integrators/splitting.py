@@ -43,6 +43,7 @@ from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.error_estimate import (body_scales, quaternion_error, scaled_size,
                                            store_scales)
 from rigid_sim.core.integrators.base import Integrator
+from rigid_sim.core.integrators.substeps import substeps_checked
 from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
                                                     FORWARD_EULER)
@@ -224,38 +225,42 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
     weights) costs k + 1 kicks. Consecutive substeps each keep their own end kicks. Returns
     the failure code and the largest of the estimates it writes into ``error`` (N,).
     """
-    start, slopes, force, torque, before, estimate, scales = work
-    store_scales(y, model, h * substeps, scales)
+    store_scales(y, model, h * substeps, work[6])
     error[:] = 0.0
+    arguments = (work, model, effects, time, h, weights, velocity_dependent, a, b, drift, error)
+    code = substeps_checked(_strang_substep, y, substeps, arguments)
+    return code, (math.inf if code != 0 else error.max())
+
+
+@helper
+def _strang_substep(y, k, work, model, effects, time, h, weights, velocity_dependent, a, b,
+                    drift, error):
+    """Substep ``k`` of :func:`_strang_composition`: its kicks and drifts, estimated."""
+    start, slopes, force, torque, before, estimate, scales = work
     # A kick's first wrench, at the momenta before it: the one the estimate compares.
     first_force = slopes[0, :, 0:3] if velocity_dependent else force
     first_torque = slopes[0, :, 3:6] if velocity_dependent else torque
-    for k in range(substeps):
-        estimate[:, :] = 0.0
-        t = time + k * h
-        kick = 0.5 * weights[0]
-        for j in range(weights.size + 1):
-            _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
-            _add_kick_error(y, model, estimate, weights[j - 1] * h if j > 0 else 0.0,
-                            first_force, first_torque, before)
-            if j == weights.size:
-                break
-            _drift(y, model, weights[j] * h, drift, estimate)
-            t += weights[j] * h
-            following = weights[j + 1] if j + 1 < weights.size else 0.0
-            kick = 0.5 * (weights[j] + following)
-        for i in range(y.shape[0]):
-            q = kin.normalize(kin.orientation(y, i))
-            kin.store(y, i, 3, q)
-            error[i] += _substep_error(
-                q, kin.vector(estimate, i, 0), kin.vector(estimate, i, 3),
-                (kin.vector(estimate, i, 10),
-                 (estimate[i, 6], estimate[i, 7], estimate[i, 8], estimate[i, 9])),
-                kin.vector(scales, i, 0))
-        code = kin.check_substep(y)
-        if code != 0:
-            return code * (k + 1), math.inf
-    return 0, error.max()
+    estimate[:, :] = 0.0
+    t = time + k * h
+    kick = 0.5 * weights[0]
+    for j in range(weights.size + 1):
+        _kick(y, work, model, effects, t, kick * h, velocity_dependent, a, b)
+        _add_kick_error(y, model, estimate, weights[j - 1] * h if j > 0 else 0.0,
+                        first_force, first_torque, before)
+        if j == weights.size:
+            break
+        _drift(y, model, weights[j] * h, drift, estimate)
+        t += weights[j] * h
+        following = weights[j + 1] if j + 1 < weights.size else 0.0
+        kick = 0.5 * (weights[j] + following)
+    for i in range(y.shape[0]):
+        q = kin.normalize(kin.orientation(y, i))
+        kin.store(y, i, 3, q)
+        error[i] += _substep_error(
+            q, kin.vector(estimate, i, 0), kin.vector(estimate, i, 3),
+            (kin.vector(estimate, i, 10),
+             (estimate[i, 6], estimate[i, 7], estimate[i, 8], estimate[i, 9])),
+            kin.vector(scales, i, 0))
 
 
 @helper(inline='always')

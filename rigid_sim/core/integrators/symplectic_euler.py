@@ -12,6 +12,7 @@ from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.error_estimate import quaternion_error, scaled_size, store_scales
 from rigid_sim.core.integrators.base import Integrator
+from rigid_sim.core.integrators.substeps import substeps_checked
 
 
 @helper
@@ -75,14 +76,17 @@ def semi_implicit_euler(y, work, model, effects, time, h, substeps, error, conti
     error[:] = 0.0
     if not continuing:
         accumulate(effects, y, time, model, force, torque)
-    for k in range(substeps):
-        _kick_drift(y, model, force, torque, h, before, estimate)
-        code = kin.check_substep(y)
-        if code != 0:
-            return code * (k + 1), math.inf
-        accumulate(effects, y, time + (k + 1) * h, model, force, torque)
-        _add_errors(y, model, force, torque, h, before, estimate, scales, error)
-    return 0, error.max()
+    code = substeps_checked(_substep, y, substeps, (work, model, effects, time, h, error))
+    return code, (math.inf if code != 0 else error.max())
+
+
+@helper
+def _substep(y, k, work, model, effects, time, h, error):
+    """Substep ``k`` of :func:`semi_implicit_euler`; the wrench at its end, its estimate."""
+    force, torque, before, estimate, scales = work
+    _kick_drift(y, model, force, torque, h, before, estimate)
+    accumulate(effects, y, time + (k + 1) * h, model, force, torque)
+    _add_errors(y, model, force, torque, h, before, estimate, scales, error)
 
 
 class SemiImplicitEuler(Integrator):
