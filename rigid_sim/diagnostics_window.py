@@ -69,7 +69,8 @@ def error_values(stats, world):
     control = world.control
     momentum, energy = world.invariant_drift()
     return {
-        'error estimate: largest local in window': stats.largest_error,
+        'error estimate: largest local in window': (
+            stats.largest_error if stats.ticks else 'none (no step in window)'),
         'error estimate: accumulated since reset': world.diagnostics.accumulated_error,
         'error estimate: angular momentum drift of torque-free bodies': (
             'none (every body torqued)' if np.isnan(momentum) else momentum),
