@@ -9,6 +9,8 @@ at the end of the last step; a wrench held since then must still be seen. When n
 couples bodies, the Runge-Kutta methods take one body at a time through all stages; that
 changes the order of the loops, not one operation on a body.
 """
+import math
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -16,10 +18,13 @@ from scipy.spatial.transform import Rotation
 from rigid_sim.core.effects.base import acts_per_body
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
+from rigid_sim.core.dispatch import CompiledCall
 from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators import REGISTRY, make_integrator, runge_kutta, splitting
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
-from rigid_sim.core.state import RigidBodies, initial_state
+from rigid_sim.core.kinematics import largest_spin
+from rigid_sim.core.state import (ANGULAR_MOMENTUM as L_COLUMNS, initial_state,
+                                  LINEAR_MOMENTUM, RigidBodies)
 from rigid_sim.core.world import World
 
 AGREEMENT = 1e-13      # relative: round-off of one flow call, whatever the path
@@ -85,13 +90,7 @@ def test_guard_plans_afresh_for_an_integrator_swapped_between_steps():
     split before it starts, not only when the end-of-step check finds the bound broken.
     Error control is off: the bounds are under test.
     """
-    bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
-                         np.zeros((1, 3)))
-    y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
-                      [[0.0, 0.0, 20.0]])
-    wrenches = AppliedWrenches(bodies)
-    wrenches.hold(0, 'push', 'body', (0.0, 0.0, 0.0), (0.0, 0.0, 0.1))
-    world = World(bodies, y, [], 'rk4', inputs=wrenches, error_control=False)
+    world = _torqued_spinner('rk4')
     world.step(0.01)
     assert world.diagnostics.substeps == 1
     world.integrator = make_integrator('exact_split', world, 1e-6)
@@ -99,6 +98,86 @@ def test_guard_plans_afresh_for_an_integrator_swapped_between_steps():
     assert world.diagnostics.substeps > 1
     assert 'exact_split' in world.diagnostics.reason
     assert 'reached during the step' not in world.diagnostics.reason
+
+
+def test_guard_plans_afresh_for_a_longer_step():
+    """A torqued body at |omega| = 20 rad/s: |omega| dt 0.02 fits exact_split's bound, 0.2 not.
+
+    The plan the end of a step makes is for a step of the same ``dt``: a longer step after it
+    is split before it starts, not only once its end finds the bound broken.
+    """
+    world = _torqued_spinner('exact_split')
+    world.step(0.001)
+    assert world.diagnostics.substeps == 1
+    world.step(0.01)
+    bound = REGISTRY['exact_split'].bound.rotation
+    assert world.diagnostics.substeps == math.ceil(20.0 * 0.01 / bound)
+    assert 'reached during the step' not in world.diagnostics.reason
+    assert world.diagnostics.redone_steps == 0
+
+
+def test_forces_held_at_world_points_between_steps_act_from_the_next_step():
+    """Every step feels the world_point forces held when it starts, and no others.
+
+    A body at rest, I = diag(1, 2, 3), steps of h = 1/1024 s: 2 steps of nothing, 6 of F1
+    at p1 and, from the 5th, 2 of F2 at p2 (its hold ends then). A world-axes force adds
+    F h to P whatever the body's turning: P = 6 h F1 + 2 h F2. Its torque about the centre
+    of mass is R p x F; the body turns by ~1e-5 rad in these steps, so L = 6 h p1 x F1
+    + 2 h p2 x F2 to 1e-4.
+    """
+    bodies = RigidBodies(('body',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None], np.zeros((1, 3)))
+    y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
+                      np.zeros((1, 3)))
+    world = World(bodies, y, [], 'rk4', inputs=AppliedWrenches(bodies), error_control=False)
+    h = 1.0 / 1024.0
+    first, second = np.array([2.0, -1.0, 0.5]), np.array([0.0, 1.5, -1.0])
+    at_first, at_second = np.array([0.1, 0.2, 0.0]), np.array([0.0, -0.1, 0.3])
+    holds = {2: lambda: world.inputs.hold(0, 'a', 'world_point', first, point=at_first),
+             4: lambda: world.inputs.hold(0, 'b', 'world_point', second, point=at_second,
+                                          expires=world.time + 2 * h),
+             8: lambda: world.inputs.release(0, 'a')}
+    for step in range(10):
+        holds.get(step, lambda: None)()
+        world.step(h)
+    np.testing.assert_allclose(world.y[0, LINEAR_MOMENTUM], 6 * h * first + 2 * h * second,
+                               rtol=1e-12)
+    np.testing.assert_allclose(world.y[0, L_COLUMNS],
+                               6 * h * np.cross(at_first, first)
+                               + 2 * h * np.cross(at_second, second), rtol=1e-4)
+    assert world.inputs.held == {}
+
+
+def test_compiled_call_answers_as_the_kernel():
+    """Through CompiledCall the first call and those after give what the kernel gives.
+
+    Two bodies at rest orientation, I = diag(1, 2, 3), spinning at 2 and 5 rad/s about z
+    (L = I omega): the largest spin of the first alone is 2 rad/s, of both 5 rad/s.
+    """
+    inertia = np.diag([1.0, 2.0, 3.0])
+    y = np.zeros((2, 13))
+    y[:, 6] = 1.0
+    y[:, 12] = [3.0 * 2.0, 3.0 * 5.0]
+    inertia_inv = np.repeat(np.linalg.inv(inertia)[None], 2, axis=0)
+    first = np.array([True, False])
+    call = CompiledCall(largest_spin)
+    for everyone, expected in ((False, 2.0), (True, 5.0), (False, 2.0)):
+        assert call(y, inertia_inv, first, first, everyone) == pytest.approx(expected, 1e-15)
+        assert largest_spin(y, inertia_inv, first, first, everyone) == call(
+            y, inertia_inv, first, first, everyone)
+
+
+def _torqued_spinner(integrator):
+    """Return a body of I = diag(1, 2, 3), unturned, spinning at 20 rad/s about z, torqued.
+
+    It holds a body-axes torque about z; error control is off: the bounds are under test.
+    """
+    bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
+                         np.zeros((1, 3)))
+    y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
+                      [[0.0, 0.0, 20.0]])
+    wrenches = AppliedWrenches(bodies)
+    wrenches.hold(0, 'push', 'body', (0.0, 0.0, 0.0), (0.0, 0.0, 0.1))
+    return World(bodies, y, [], integrator, inputs=wrenches, error_control=False)
 
 
 def _per_body_scene(damped=True):

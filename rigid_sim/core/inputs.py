@@ -95,6 +95,10 @@ class AppliedWrenches:
         # O(log n), not a walk over all n held wrenches.
         self._expiries = []
         self._order = itertools.count()
+        # The earliest end in that heap (inf: none; an entry of a hold replaced or released
+        # since counts until expire pops it): expire(t) drops nothing while
+        # t + EXPIRY_SLACK < next_expiry, so a step need not call it.
+        self.next_expiry = np.inf
         self._points_stale = True
         self._refresh()
         # Counts every change of the holdings: the step guard's cached spin is of one version.
@@ -138,6 +142,7 @@ class AppliedWrenches:
             self._points_stale = True
         if held.expires < np.inf:
             heapq.heappush(self._expiries, (held.expires, next(self._order), body, key, held))
+            self.next_expiry = self._expiries[0][0]
         self._resum(body)
 
     def release(self, body=None, key=None):
@@ -147,6 +152,7 @@ class AppliedWrenches:
             self._by_body.clear()
             self._at_points.clear()
             self._expiries.clear()
+            self.next_expiry = np.inf
             self._points_stale = True
         else:
             dropped = [body]
@@ -165,6 +171,7 @@ class AppliedWrenches:
             if self._by_body.get(body, {}).get(key) is held:
                 self._take(body, key)
                 ended.add(body)
+        self.next_expiry = self._expiries[0][0] if self._expiries else np.inf
         for body in ended:
             self._resum(body)
 

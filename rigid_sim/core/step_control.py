@@ -115,7 +115,7 @@ class StepController:
         self.auto_substep = bool(auto_substep)
         self.error_control = bool(error_control)
         self.diagnostics = StepDiagnostics()
-        self._next_plan = None   # the end check's plan: (y, dt, version, integrator, count, why)
+        self._next_plan = None   # the end check's plan for the next step: (dt, count, why)
         self._ended = None       # (state, inputs version, integrator) the last step ended at
 
     def restart(self):
@@ -134,26 +134,45 @@ class StepController:
         ended, integrator = self._ended, self.integrator
         continuing = (ended is not None and ended[0] is y and ended[1] == version
                       and ended[2] is integrator)
-        substeps, why = self._plan(y, dt, version, continuing)
+        substeps, why = self._plan(y, dt, continuing)
         failed = self._attempt(y, into, time, dt, substeps, effects, continuing)
         if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
             return self._record(None, substeps, why, version)
         if self.auto_substep or (self.error_control
                                  and integrator.largest_error > self.tolerance):
-            for _ in range(MAX_REDOS):
-                redo = self._check_end(into, dt, substeps, version)
-                if redo is None:
-                    break
-                substeps, why = redo
-                self.diagnostics.redone_steps += 1
-                failed = self._attempt(y, into, time, dt, substeps, effects, False)
-                if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
-                    return self._record(None, substeps, why, version)
+            redo = self._check_end(into, dt, substeps)
+            if redo is not None:
+                return self._redo(y, into, time, dt, effects, version, redo)
         return self._record(into, substeps, why, version)
 
-    def _plan(self, y, dt, version, continuing):
-        """Substeps and why for a step of ``dt`` from ``y``: the bounds', or the error's."""
-        substeps, why = self._bound_plan(y, dt, version) if self.auto_substep else (1, '')
+    def _redo(self, y, into, time, dt, effects, version, redo):
+        """Attempt the step again with the (substeps, why) its end asks for, and record it.
+
+        At most :data:`MAX_REDOS` times; the end of the last attempt is not checked.
+        """
+        for redone in range(1, MAX_REDOS + 1):
+            substeps, why = redo
+            self.diagnostics.redone_steps += 1
+            failed = self._attempt(y, into, time, dt, substeps, effects, False)
+            if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
+                return self._record(None, substeps, why, version)
+            if redone == MAX_REDOS or (redo := self._check_end(into, dt, substeps)) is None:
+                return self._record(into, substeps, why, version)
+
+    def _plan(self, y, dt, continuing):
+        """Substeps and why for a step of ``dt`` from ``y``: the bounds', or the error's.
+
+        The bounds' plan is the one the last step's end check made for a step of ``dt``
+        from where it ended (:meth:`_check_end`), unless that step is not ``continuing``.
+        """
+        if self.auto_substep:
+            planned, self._next_plan = self._next_plan, None   # good for one step only
+            if continuing and planned is not None and planned[0] == dt:
+                substeps, why = planned[1], planned[2]
+            else:
+                substeps, why = self.guard.plan(self.integrator, y, dt, self.diagnostics.substeps)
+        else:
+            substeps, why = 1, ''
         diagnostics = self.diagnostics
         # Nothing to predict unless the last step was split or its estimate was near the aim.
         if not (continuing and self.error_control
@@ -167,17 +186,6 @@ class StepController:
             why = ErrorReason(self.diagnostics.error_estimate, self.tolerance,
                               self.integrator.name, substeps, capped)
         return substeps, why
-
-    def _bound_plan(self, y, dt, version):
-        """Return the guard's plan, made by the last end check if nothing changed since.
-
-        It read the state, ``dt``, the inputs held, the integrator and the count kept.
-        """
-        planned, self._next_plan = self._next_plan, None   # good for one step only
-        if (planned is not None and planned[0] is y and planned[1] == dt
-                and planned[2] == version and planned[3] is self.integrator):
-            return planned[4], planned[5]
-        return self.guard.plan(self.integrator, y, dt, self.diagnostics.substeps)
 
     def _error_plan(self, dt):
         """Substeps the last step's estimate predicts for this one (0: no prediction)."""
@@ -228,7 +236,7 @@ class StepController:
                    else f'{type(failed).__name__}: {failed}')
         self.diagnostics.last_failure = f't = {time:.6g} s: {failure}'
 
-    def _check_end(self, y, dt, substeps, version):
+    def _check_end(self, y, dt, substeps):
         """(substeps, why) to redo the step with, or None to keep it.
 
         A wrench may spin a body up within the step: the end state breaks the bound. The
@@ -238,11 +246,11 @@ class StepController:
             grown, why = self.guard.plan(self.integrator, y, dt, substeps)
             if grown > substeps:
                 return grown, why._replace(reached=True)
-            # The plan a step of dt from y will make, unless y or the inputs change.
-            self._next_plan = (y, dt, version, self.integrator, grown, why)
+            # The plan a step of dt from y will make, if the next step continues this one.
+            self._next_plan = (dt, grown, why)
         estimate = self.integrator.largest_error
-        if (self.error_control and not self.integrator.adaptive
-                and self.tolerance < estimate < math.inf and substeps < self._error_cap):
+        if (self.tolerance < estimate < math.inf and self.error_control
+                and not self.integrator.adaptive and substeps < self._error_cap):
             need = self._need(substeps, estimate)
             wanted = min(max(substeps + 1, math.ceil(need)), self._error_cap)
             return wanted, ErrorReason(estimate, self.tolerance, self.integrator.name, wanted,

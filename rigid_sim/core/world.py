@@ -16,7 +16,7 @@ import numpy as np
 from rigid_sim.core import safeguards
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.error_estimate import rotational_invariants
-from rigid_sim.core.inputs import AppliedWrenches
+from rigid_sim.core.inputs import AppliedWrenches, EXPIRY_SLACK
 from rigid_sim.core.integrators import make_integrator
 from rigid_sim.core.state import STATE_WIDTH, Snapshot
 from rigid_sim.core.step_control import StepController
@@ -65,6 +65,7 @@ class World:
         self.torqued = self.inputs.accepts_wrench | self.torqued_by_effects
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._effect_parameters = tuple(effect.parameters for effect in self.effects)
+        self._parameters = self._effect_parameters + (self.inputs.parameters,)
         self.control = StepController(
             safeguards.StepGuard(bodies, self.effects, self.inputs),
             make_integrator(integrator, self, tolerance), tolerance, auto_substep,
@@ -127,8 +128,15 @@ class World:
         return float(drift[:, 0].max()), float(drift[:, 1].max())
 
     def effect_parameters(self):
-        """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'."""
-        return self._effect_parameters + (self.inputs.parameters,)
+        """Return the parameters the compiled wrench sum reads: each effect's, then the inputs'.
+
+        One tuple, made again only when the inputs' parameters are new (the world_point
+        forces held changed): the other held wrenches are sums changed in place.
+        """
+        wrenches = self.inputs.parameters
+        if wrenches is not self._parameters[-1]:
+            self._parameters = self._effect_parameters + (wrenches,)
+        return self._parameters
 
     def reset(self):
         """Back to the initial state at time 0, with no wrench held.
@@ -164,11 +172,13 @@ class World:
         nothing, for a non-finite or non-positive ``dt``.
         """
         dt = float(dt)
-        if not (math.isfinite(dt) and dt > 0.0):
+        if not 0.0 < dt < math.inf:   # NaN too
             raise ValueError(f'time step must be finite and positive, got {dt} s')
-        self.inputs.expire(self.time)
+        inputs = self.inputs
+        if inputs.next_expiry <= self.time + EXPIRY_SLACK:
+            inputs.expire(self.time)
         stepped = self.control.step(self._y, self._spare, self.time, dt,
-                                    self.effect_parameters(), self.inputs.version)
+                                    self.effect_parameters(), inputs.version)
         if stepped is None:
             return False
         self._spare, self._y = self._y, stepped
