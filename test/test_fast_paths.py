@@ -116,6 +116,29 @@ def test_guard_plans_afresh_for_a_longer_step():
     assert world.diagnostics.redone_steps == 0
 
 
+def test_guard_keeps_the_spin_of_the_state_a_redone_step_ended_with():
+    """A body-axes torque spins a tumbling body past exact_split's bound within one step.
+
+    The end check finds the bound broken and redoes the step in substeps, writing over its
+    first attempt. The spin the guard keeps for the next step's plan is that of the state
+    the step ended with: the same as the guard measures afresh.
+    """
+    bodies = RigidBodies(('spinner',), np.ones(1), np.diag([1.0, 2.0, 3.0])[None],
+                         np.zeros((1, 3)))
+    y = initial_state(bodies, np.zeros((1, 3)), [[0.0, 0.0, 0.0, 1.0]], np.zeros((1, 3)),
+                      [[5.0, 0.0, 0.0]])   # |omega| dt = 0.05: within the bound
+    wrenches = AppliedWrenches(bodies)
+    wrenches.hold(0, 'spin', 'body', (0.0, 0.0, 0.0), (0.0, 3000.0, 6000.0))
+    world = World(bodies, y, [], 'exact_split', inputs=wrenches, error_control=False)
+    world.step(0.01)
+    assert world.diagnostics.redone_steps >= 1
+    assert 'reached during the step' in world.diagnostics.reason
+    guard, bound = world.control.guard, world.integrator.bound
+    kept = guard.spin_rate(bound, world.y)
+    guard.forget()
+    assert kept == guard.spin_rate(bound, world.y) > 0.05 / 0.01
+
+
 def test_forces_held_at_world_points_between_steps_act_from_the_next_step():
     """Every step feels the world_point forces held when it starts, and no others.
 

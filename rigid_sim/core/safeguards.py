@@ -148,11 +148,16 @@ class StepGuard:
         return substeps, SplitReason(bound.kind, self._rate * dt, spin * bound.rotation, need,
                                      integrator.name, substeps, capped)
 
+    def forget(self):
+        """Forget the spin measured last: its state is about to be written over (a redo)."""
+        self._last_spin = (None, None, 0.0)
+
     def spin_rate(self, bound, y):
         """Largest ``|omega|``, rad/s, of the bodies whose rotation ``bound`` covers.
 
         The check at the end of a step and the plan of the next one read the same state
-        object (the World replaces ``y``, never writes it in place): the second is a lookup.
+        object (the World replaces ``y``; a redo that writes over a state it measured first
+        calls :meth:`forget`): the second is a lookup.
         """
         if bound.rotation == math.inf or not (bound.rotation_all or self._may_torque):
             return 0.0

@@ -148,11 +148,15 @@ class StepController:
     def _redo(self, y, into, time, dt, effects, version, redo):
         """Attempt the step again with the (substeps, why) its end asks for, and record it.
 
-        At most :data:`MAX_REDOS` times; the end of the last attempt is not checked.
+        At most :data:`MAX_REDOS` times; the end of the last attempt is not checked, so the
+        next step plans afresh. Each attempt writes over ``into``: what the end check
+        measured of it (the spin, the next step's plan) goes with it.
         """
         for redone in range(1, MAX_REDOS + 1):
             substeps, why = redo
             self.diagnostics.redone_steps += 1
+            self.guard.forget()
+            self._next_plan = None
             failed = self._attempt(y, into, time, dt, substeps, effects, False)
             if failed and not self._retry(y, into, time, dt, substeps, effects, failed):
                 return self._record(None, substeps, why, version)
