@@ -98,7 +98,7 @@ def dlm_rotation(moments, momentum, q, h):
 
 
 @helper
-def dlm_error(moments, momentum, q, h):
+def dlm_error(inverse_moments, momentum, q, h):
     """Leading local error of :func:`dlm_rotation` against the exact flow: ``L_b`` and ``q``.
 
     The DLM drift is Strang's composition of the flows of ``T_1`` and of the Strang step of
@@ -110,19 +110,19 @@ def dlm_error(moments, momentum, q, h):
     in the Lie-Poisson bracket ``{F, G} = L_b . (grad F x grad G)`` (a double bracket keeps
     the sign either way). With ``{T_i, T_j} = L_1 L_2 L_3 / (I_i I_j)`` and
     ``{T_1, L_1 L_2 L_3} = L_1^2 (L_3^2 - L_2^2) / I_1`` (both cyclic), ``H_3`` is
-    ``c12 u1 u2 + c13 u1 u3 + c23 u2 u3`` in ``u_k = L_k^2``. Its flow for ``h`` errs by
-    ``h^3 L_b x g`` and ``h^3 q (g, 0) / 2``, ``g = grad H_3`` (a body rate); the rest is
-    ``O(h^4)``. Arguments as for :func:`dlm_rotation`; returns the two errors (3- and
-    4-tuples, the latter a pure turn of ``q``).
+    ``(c12 u1 u2 + c13 u1 u3 + c23 u2 u3) / 24`` in ``u_k = L_k^2``. Its flow for ``h`` errs
+    by ``h^3 L_b x g`` and ``h^3 q (g, 0) / 2``, ``g = grad H_3`` (a body rate); the rest is
+    ``O(h^4)``. ``inverse_moments`` (3-tuple) are ``1 / I_k``, the rest as for
+    :func:`dlm_rotation`; returns the two errors (3- and 4-tuples, the latter a pure turn).
     """
-    r1, r2, r3 = 1.0 / moments[0], 1.0 / moments[1], 1.0 / moments[2]
+    r1, r2, r3 = inverse_moments
     a, b = r1 * (r2 - r3), r2 * r3
-    c12 = (a * (r1 - 2.0 * r2) - b * r2) / 24.0
-    c13 = (a * (2.0 * r3 - r1) + 2.0 * b * r3) / 24.0
-    c23 = (2.0 * a * (r2 - r3) + b * (r2 - 2.0 * r3)) / 24.0
+    c12 = a * (r1 - 2.0 * r2) - b * r2
+    c13 = a * (2.0 * r3 - r1) + 2.0 * b * r3
+    c23 = 2.0 * a * (r2 - r3) + b * (r2 - 2.0 * r3)
     m = momentum
     u1, u2, u3 = m[0] * m[0], m[1] * m[1], m[2] * m[2]
-    cube = 2.0 * h * h * h   # 2: the gradient of u_k
+    cube = h * h * h * (1.0 / 12.0)   # 2 / 24: the gradient of u_k, and H_3's denominator
     g = (cube * m[0] * (c12 * u2 + c13 * u3), cube * m[1] * (c12 * u1 + c23 * u3),
          cube * m[2] * (c13 * u1 + c23 * u2))
     return kin.cross(m, g), kin.multiply(q, (0.5 * g[0], 0.5 * g[1], 0.5 * g[2], 0.0))
@@ -136,10 +136,11 @@ def _dlm_drift(moments, momentum, q, h):
     LEADING_TERM_ANGLE, else the difference to the exact flow.
     """
     turned, q_turned = dlm_rotation(moments, momentum, q, h)
-    widest = abs(h) * max(abs(momentum[0]) / moments[0], abs(momentum[1]) / moments[1],
-                          abs(momentum[2]) / moments[2])
+    inverse = (1.0 / moments[0], 1.0 / moments[1], 1.0 / moments[2])
+    widest = abs(h) * max(abs(momentum[0]) * inverse[0], abs(momentum[1]) * inverse[1],
+                          abs(momentum[2]) * inverse[2])
     if widest <= LEADING_TERM_ANGLE:
-        return turned, q_turned, dlm_error(moments, momentum, q, h)
+        return turned, q_turned, dlm_error(inverse, momentum, q, h)
     exact_momentum, exact_q = free_flow(moments, momentum, q, h)
     return turned, q_turned, (kin.plus_scaled(turned, -1.0, exact_momentum),
                               kin.plus_scaled4(q_turned, -1.0, exact_q))
