@@ -54,10 +54,11 @@ YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
 DLM_DRIFT, EXACT_DRIFT = 0, 1   # which free rotation a kernel drifts with
 # The widest turn about one axis in a DLM drift, |h| max |L_i / I_i| (rad), up to which the
-# drift's error is estimated by its leading term (:func:`dlm_error`). There the term is within
-# a factor 1.5 of the true error on asymmetric bodies, and of 5 on a thin rod where it passes
-# through zero; beyond, the series it leads converges slowly, and the drift is compared with
-# the exact flow (five times the cost of the drift). dlm's step guard keeps its drifts below
+# drift's error is estimated by its leading term (:func:`dlm_error`). There the term came
+# within a factor 2.2 of the true error on the asymmetric bodies tried, and of 5 on a thin rod
+# (I = 1e-4, 1, 1.0001) where it passes through zero; beyond, the series it leads converges
+# slowly (that rod at 1 rad: 0.1 to 12 times the truth), and the drift is compared with the
+# exact flow (five times the cost of the drift). dlm's step guard keeps its drifts below
 # 0.045 rad; dlm4's sub-drifts reach 0.49.
 LEADING_TERM_ANGLE = 0.1
 
