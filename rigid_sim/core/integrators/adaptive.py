@@ -18,8 +18,8 @@ from rigid_sim.core.compiled import kernel
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.runge_kutta import (_add_slope, _set_stage, _slope,
-                                                    _to_internal, _to_public)
+from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slope_of,
+                                                       to_internal, to_public)
 from rigid_sim.core.kinematics import check_substep
 
 
@@ -50,27 +50,27 @@ def body_momentum_derivative(inner, work, model, effects, time, out):
     world, momentum, force, torque = work
     zero = (0.0, 0.0, 0.0)
     for i in range(inner.shape[0]):
-        _set_stage(inner, i, 0.0, (zero, (0.0, 0.0, 0.0, 0.0), zero, zero), world, momentum,
-                   True)
+        set_stage(inner, i, 0.0, (zero, (0.0, 0.0, 0.0, 0.0), zero, zero), world, momentum,
+                  True)
     accumulate(effects, world, time, model, force, torque)
     for i in range(inner.shape[0]):
         for k in range(13):
             out[i, k] = 0.0
-        _add_slope(out, i, 1.0, _slope(world, momentum, model, force, torque, True, i))
+        add_slope(out, i, 1.0, slope_of(world, momentum, model, force, torque, True, i))
     return out
 
 
 @kernel
 def to_body_axes(y, start):
     """``start`` (N, 13) = ``y`` with ``L_b = R^T L`` in slots 10:13."""
-    _to_internal(y, start, True)
+    to_internal(y, start, True)
 
 
 @kernel
 def from_body_axes(start, y):
     """``y`` (N, 13) = ``start`` with a unit quaternion and world ``L`` from ``L_b``."""
     kin.copy_columns(y, 0, start, 0, 13)
-    _to_public(y, True)
+    to_public(y, True)
 
 
 class Dopri5(Integrator):

@@ -2,14 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Explicit Runge-Kutta methods with fixed steps, given as Butcher tableaux.
 
-A method is data: its tableau and the momenta it differentiates. Baraff's world-axes ``L``
-has ``omega = R I_body^-1 R^T L`` depend on ``q``, so every error in ``q`` feeds back into
-``omega`` and grows. Body-axes ``L_b = R^T L`` has ``omega_b = I_body^-1 L_b`` independent
-of ``q`` (Euler's equations), so near the intermediate axis RK4 in body axes is orders of
-magnitude more accurate at the same step (``rk4`` against ``rk4_world`` in the tumbling
-table of docs/accuracy.md, made by ``rigid_sim_bench accuracy``). The public state stays
-Baraff's; only the inside of a step changes: in body axes, slots 10:13 of the internal state
-hold ``L_b``.
+A method is data: its tableau and the momenta it differentiates, in world or body axes
+(:mod:`~rigid_sim.core.integrators.internal_state`: ``rk4`` against ``rk4_world`` in the
+tumbling table of docs/accuracy.md, made by ``rigid_sim_bench accuracy``).
 """
 import math
 from dataclasses import dataclass
@@ -24,6 +19,8 @@ from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.error_estimate import (body_scales, scaled_size, store_scales,
                                            turning_part)
 from rigid_sim.core.integrators.base import Integrator
+from rigid_sim.core.integrators.internal_state import (add_slope, derivative, set_stage,
+                                                       slope_of, to_internal, to_public)
 from rigid_sim.core.integrators.substeps import substeps_checked
 
 
@@ -96,91 +93,6 @@ CLASSICAL_RK4 = Tableau(
 
 
 @helper
-def _to_internal(y, start, body_axes):
-    """``start`` = ``y``, with ``L_b = R^T L`` in slots 10:13 when ``body_axes``."""
-    kin.copy_columns(start, 0, y, 0, 13)
-    if body_axes:
-        for i in range(y.shape[0]):
-            r = kin.matrix(kin.orientation(y, i))
-            kin.store(start, i, 10, kin.rotate_inverse(r, kin.vector(y, i, 10)))
-
-
-@helper
-def _derivative(q, momentum, angular, force, torque, inertia_inv, inverse_mass, body_axes):
-    """``d/dt`` of a body's internal state: (dx, dq, dP, dL) tuples.
-
-    ``q`` and ``momentum`` are the stage's quaternion and linear momentum, ``angular`` its
-    internal angular momentum (``L_b`` when ``body_axes``, else world ``L``); ``force`` and
-    ``torque`` the net wrench, world axes; ``inertia_inv`` the body's ``I_body^-1`` as a
-    9-tuple (:func:`~rigid_sim.core.kinematics.entries`), ``inverse_mass`` its ``1 / M``.
-    """
-    r = kin.matrix(q)
-    if body_axes:
-        omega_body = kin.rotate(inertia_inv, angular)
-        dq = kin.multiply(q, (omega_body[0], omega_body[1], omega_body[2], 0.0))
-        turned = kin.rotate_inverse(r, torque)
-        gyroscopic = kin.cross(angular, omega_body)   # L_b x omega_b = -omega_b x L_b
-        dl = kin.add(turned, gyroscopic)
-    else:
-        omega = kin.angular_velocity(r, inertia_inv, angular)
-        dq = kin.multiply((omega[0], omega[1], omega[2], 0.0), q)
-        dl = torque
-    dx = (momentum[0] * inverse_mass, momentum[1] * inverse_mass, momentum[2] * inverse_mass)
-    return dx, (0.5 * dq[0], 0.5 * dq[1], 0.5 * dq[2], 0.5 * dq[3]), force, dl
-
-
-@helper
-def _slope(world, momentum, model, force, torque, body_axes, i):
-    """:func:`_derivative` of body ``i`` of a stage held in arrays.
-
-    ``world`` (N, 13) holds the stage in world axes, ``momentum`` (N, 3) its internal
-    angular momentum.
-    """
-    return _derivative(kin.orientation(world, i), kin.vector(world, i, 7),
-                       kin.vector(momentum, i, 0), kin.vector(force, i, 0),
-                       kin.vector(torque, i, 0), kin.entries(model.inertia_inv, i),
-                       model.inverse_mass[i], body_axes)
-
-
-@helper
-def _set_stage(start, i, step, slope, world, momentum, body_axes):
-    """Body ``i`` of the stage ``start + step slope``, into ``world`` and ``momentum``."""
-    dx, dq, dp, dl = slope
-    for k in range(3):
-        world[i, k] = start[i, k] + step * dx[k]
-        world[i, 7 + k] = start[i, 7 + k] + step * dp[k]
-        momentum[i, k] = start[i, 10 + k] + step * dl[k]
-    for k in range(4):
-        world[i, 3 + k] = start[i, 3 + k] + step * dq[k]
-    angular = kin.vector(momentum, i, 0)
-    if body_axes:
-        angular = kin.rotate(kin.matrix(kin.orientation(world, i)), angular)
-    kin.store(world, i, 10, angular)
-
-
-@helper
-def _add_slope(y, i, weight, slope):
-    """``y[i] += weight slope`` in the internal layout."""
-    dx, dq, dp, dl = slope
-    for k in range(3):
-        y[i, k] += weight * dx[k]
-        y[i, 7 + k] += weight * dp[k]
-        y[i, 10 + k] += weight * dl[k]
-    for k in range(4):
-        y[i, 3 + k] += weight * dq[k]
-
-
-@helper
-def _to_public(y, body_axes):
-    """Normalise the quaternions and turn ``L_b`` (slots 10:13) into world-axes ``L``, in place."""
-    for i in range(y.shape[0]):
-        q = kin.normalize(kin.orientation(y, i))
-        kin.store(y, i, 3, q)
-        if body_axes:
-            kin.store(y, i, 10, kin.rotate(kin.matrix(q), kin.vector(y, i, 10)))
-
-
-@helper
 def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal):
     """One step of ``h`` on ``y`` in place; the estimate's terms of the stages into ``work``.
 
@@ -190,7 +102,7 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
     """
     start, world, momentum, force, torque, estimate, scales, rates = work
     a, b, c, e, _, _ = method
-    _to_internal(y, start, body_axes)
+    to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
     kin.copy_columns(y, 10, momentum, 0, 3)   # y now sums the step in the internal layout
@@ -201,27 +113,27 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
         following = a[stage + 1] * h if stage + 1 < b.size else 0.0
         for i in range(y.shape[0]):
             slope = (kin.body_state(fsal, i) if stage == 0
-                     else _slope(world, momentum, model, force, torque, body_axes, i))
-            _add_slope(y, i, h * b[stage], slope)
+                     else slope_of(world, momentum, model, force, torque, body_axes, i))
+            add_slope(y, i, h * b[stage], slope)
             if e[stage] != 0.0:
-                _add_slope(estimate, i, h * e[stage], slope)
+                add_slope(estimate, i, h * e[stage], slope)
             if stage == 1:
                 rates[i] = _step_rate(kin.body_state(fsal, i), slope, a[1])
             if stage + 1 < b.size:
-                _set_stage(start, i, following, slope, world, momentum, body_axes)
-    _to_public(y, body_axes)
+                set_stage(start, i, following, slope, world, momentum, body_axes)
+    to_public(y, body_axes)
 
 
 @helper
 def _start_slopes(y, work, model, effects, time, body_axes, fsal):
     """Every body's slope at the state ``y`` into ``fsal`` (N, 13), internal layout."""
     start, world, momentum, force, torque = work[0], work[1], work[2], work[3], work[4]
-    _to_internal(y, start, body_axes)
+    to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
     accumulate(effects, world, time, model, force, torque)
     for i in range(y.shape[0]):
-        kin.store_body(fsal, i, *_slope(world, momentum, model, force, torque, body_axes, i))
+        kin.store_body(fsal, i, *slope_of(world, momentum, model, force, torque, body_axes, i))
 
 
 @helper
@@ -236,7 +148,7 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
     _start_slopes(y, work, model, effects, time, body_axes, fsal)
     for i in range(y.shape[0]):
         slope = kin.body_state(fsal, i)
-        _add_slope(estimate, i, weight, slope)
+        add_slope(estimate, i, weight, slope)
         dx, dq, dp, dl = kin.body_state(estimate, i)
         error[i] += _own_error(scaled_size(dx, turning_part(dq, kin.orientation(y, i)), dp, dl,
                                            kin.vector(scales, i, 0)), rate_weight, rates[i])
@@ -375,8 +287,8 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
                     at = time + (k + 1) * h
                 force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
                                             model)
-                slope = _derivative(stage_q, stage_p, stage_angular, force, torque,
-                                    inertia_inv, inverse_mass, body_axes)
+                slope = derivative(stage_q, stage_p, stage_angular, force, torque,
+                                   inertia_inv, inverse_mass, body_axes)
                 if stage < b.size:
                     (x, q, p, angular), estimate = _take_slope(
                         (x, q, p, angular), estimate, slope, h * b[stage], h * e[stage])
@@ -404,8 +316,8 @@ def _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, 
         x, q, p, big_l = kin.body_state(y, i)
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         force, torque = body_wrench(effects, i, x, q, p, big_l, time, model)
-        slope = _derivative(q, p, angular, force, torque, kin.entries(model.inertia_inv, i),
-                            model.inverse_mass[i], body_axes)
+        slope = derivative(q, p, angular, force, torque, kin.entries(model.inertia_inv, i),
+                           model.inverse_mass[i], body_axes)
         kin.store_body(fsal, i, *slope)
 
 
