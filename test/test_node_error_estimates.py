@@ -40,7 +40,7 @@ def invariants(probe):
 
 
 def largest_in_windows(probe):
-    """The largest local estimate over every /diagnostics window heard that had a step.
+    """Return the largest local estimate over the /diagnostics windows heard that had a step.
 
     The node publishes once a second of wall time as well: the run's steps may fall into
     several windows, and the last one may have none.
