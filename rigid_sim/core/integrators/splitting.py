@@ -45,10 +45,10 @@ from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.error_estimate import (body_scales, quaternion_error, scaled_size,
                                            store_scales)
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.substeps import substeps_checked
 from rigid_sim.core.integrators.free_rotation import free_flow
 from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
                                                     FORWARD_EULER)
+from rigid_sim.core.integrators.substeps import substeps_checked
 
 # Yoshida (1990) weights: w1 + w0 + w1 = 1 and w1^3 + w0^3 + w1^3 = 0 cancel the h^3 error.
 YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
