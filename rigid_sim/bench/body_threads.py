@@ -24,13 +24,16 @@ MUJOCO_BODIES = 65533  # MuJoCo refuses a model of more bodies: no MuJoCo column
 
 @contextlib.contextmanager
 def threads_from(bodies):
-    """Worlds built within share their bodies among threads from ``bodies`` bodies."""
-    saved = dispatch.THREADED_BODIES
-    dispatch.THREADED_BODIES = bodies
+    """Worlds built within share their bodies among threads from ``bodies`` bodies.
+
+    Both thresholds, the splittings' (``HEAVY_THREADED_BODIES``) too.
+    """
+    saved = dispatch.THREADED_BODIES, dispatch.HEAVY_THREADED_BODIES
+    dispatch.THREADED_BODIES = dispatch.HEAVY_THREADED_BODIES = bodies
     try:
         yield
     finally:
-        dispatch.THREADED_BODIES = saved
+        dispatch.THREADED_BODIES, dispatch.HEAVY_THREADED_BODIES = saved
 
 
 def wall_sweep(sizes, work, repeats, with_mujoco):
