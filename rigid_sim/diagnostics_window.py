@@ -22,6 +22,7 @@ class TickStats:
         self.step_max = 0.0     # s, the longest of them
         self.failed_ticks = 0   # ticks cut short by a step the world gave up
         self.largest_error = 0.0   # the largest local error estimate of the window's steps
+        self.steps = 0             # steps taken in the window (a paused tick takes none)
         self.sim_start = sim_time
         self.wall_start = time.monotonic()
 
@@ -33,6 +34,7 @@ class TickStats:
     def note_error(self, estimate):
         """Take a step's local error estimate into the window's largest."""
         self.largest_error = max(self.largest_error, estimate)
+        self.steps += 1
 
     @property
     def step_mean(self):
@@ -70,7 +72,7 @@ def error_values(stats, world):
     momentum, energy = world.invariant_drift()
     return {
         'error estimate: largest local in window': (
-            stats.largest_error if stats.ticks else 'none (no step in window)'),
+            stats.largest_error if stats.steps else 'none (no step in window)'),
         'error estimate: accumulated since reset': world.diagnostics.accumulated_error,
         'error estimate: angular momentum drift of torque-free bodies': (
             'none (every body torqued)' if np.isnan(momentum) else momentum),
