@@ -220,12 +220,10 @@ def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, 
     """
     scales = work[6]
     store_scales(y, model, h * substeps, scales)
-    error[:] = 0.0
     if not continuing:
         _start_slopes(y, work, model, effects, time, body_axes, fsal)
-    code = substeps_checked(_runge_kutta_substep, y, substeps,
-                            (work, model, effects, time, h, method, body_axes, error, fsal))
-    return code, (math.inf if code != 0 else error.max())
+    return substeps_checked(_runge_kutta_substep, y, substeps,
+                            (work, model, effects, time, h, method, body_axes, error, fsal), error)
 
 
 @helper

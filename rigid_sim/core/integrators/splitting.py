@@ -282,10 +282,8 @@ def _strang_composition(y, work, model, effects, time, h, substeps, weights, vel
     the failure code and the largest of the estimates it writes into ``error`` (N,).
     """
     store_scales(y, model, h * substeps, work[6])
-    error[:] = 0.0
     arguments = (work, model, effects, time, h, weights, velocity_dependent, a, b, drift, error)
-    code = substeps_checked(_strang_substep, y, substeps, arguments)
-    return code, (math.inf if code != 0 else error.max())
+    return substeps_checked(_strang_substep, y, substeps, arguments, error)
 
 
 @helper

@@ -1,8 +1,6 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
 """Semi-implicit (symplectic) Euler: kick the momenta, then drift with the new velocities."""
-import math
-
 import numpy as np
 
 from rigid_sim.core import kinematics as kin
@@ -73,11 +71,9 @@ def semi_implicit_euler(y, work, model, effects, time, h, substeps, error, conti
     """
     force, torque, before, estimate, scales = work
     store_scales(y, model, h * substeps, scales)
-    error[:] = 0.0
     if not continuing:
         accumulate(effects, y, time, model, force, torque)
-    code = substeps_checked(_substep, y, substeps, (work, model, effects, time, h, error))
-    return code, (math.inf if code != 0 else error.max())
+    return substeps_checked(_substep, y, substeps, (work, model, effects, time, h, error), error)
 
 
 @helper
