@@ -30,6 +30,7 @@ from rigid_sim.qos_overrides import QosOverrides
 from rigid_sim.reconfiguration import Reconfiguration
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
+from rigid_sim.world_owner import WorldOwner
 
 __all__ = ['LISTENER_REFRESH', 'NODE_NAME', 'RigidSimNode']
 NODE_NAME = 'rigid_sim'
@@ -137,6 +138,7 @@ class RigidSimNode(Node):
         self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
         self.qos_overrides.finish_start()
+        self.owner = WorldOwner(self)   # the only one that replaces scene, world, settings
         self.reconfiguration = Reconfiguration(self)
         self._warn_on_slow_ticks_for_imus()
         self.sim_interfaces = sim_interfaces.serve(self)   # None without the package
@@ -241,10 +243,11 @@ class RigidSimNode(Node):
         check_frames(self.scene, settings)
 
     def prepare(self, settings, scene_changed):
-        """Build what ``settings`` need and compile its kernels (in the reconfiguration worker).
+        """Build what ``settings`` need and compile its kernels (in the owner's worker).
 
         Returns a new (scene, world) when ``scene_changed``, else an integrator for the
-        running world. Nothing the node runs is changed.
+        running world, which stays the running one while the job runs (the owner's jobs run
+        one at a time and only they replace it). Nothing the node runs is changed.
         """
         if scene_changed:
             scene, world = load(settings)
@@ -256,19 +259,15 @@ class RigidSimNode(Node):
         return integrator
 
     def swap(self, settings, prepared):
-        """Run what :meth:`prepare` made for ``settings``, between two ticks."""
-        previous = self.settings
-        self.settings = settings
+        """Run what :meth:`prepare` made for ``settings``, between two ticks (by the owner)."""
         if isinstance(prepared, tuple):
-            self.check_frames(settings)
-            self.scene, self.world = prepared
-            self._wire_scene()
+            scene, world = prepared
+            self.owner.swap(settings, scene, world)
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
                                    'state, time 0, no wrench held')
         else:
-            self.world.integrator = prepared
-        self.apply(previous)
+            self.owner.swap(settings, integrator=prepared)
 
     def apply(self, previous):
         """Act on the change of the settings from ``previous`` to the running ones."""
@@ -287,13 +286,11 @@ class RigidSimNode(Node):
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
 
-    def replace_scene(self, scene, world):
-        """Run ``scene`` and ``world`` from the next tick on (bodies spawned or deleted)."""
-        self.scene, self.world = scene, world
-        self._wire_scene()
+    def wire_scene(self):
+        """Wire the running scene: new topics, messages, counters and diagnostics window.
 
-    def _wire_scene(self):
-        """Wire the current scene: new topics, messages, counters and diagnostics window."""
+        Called by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only.
+        """
         self.outputs.per_body_limit = self.inputs.per_body_limit = \
             self.settings.per_body_topics_limit
         self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
