@@ -245,7 +245,7 @@ class RigidSimNode(Node):
     def prepare(self, settings, scene_changed):
         """Build what ``settings`` need and compile its kernels (in the owner's worker).
 
-        Returns a new (scene, world) when ``scene_changed``, else an integrator for the
+        Returns a new (scene, world, wiring) when ``scene_changed``, else an integrator for the
         running world, which stays the running one while the job runs (the owner's jobs run
         one at a time and only they replace it). Nothing the node runs is changed.
         """
@@ -253,7 +253,7 @@ class RigidSimNode(Node):
             scene, world = load(settings)
             warm_up(world, settings.integrator, self.get_logger(),
                     imus=scene_imus(scene, world))
-            return scene, world
+            return scene, world, self.plan_wiring(scene, settings)
         integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
         warm_up(self.world, settings.integrator, self.get_logger(), integrator)
         return integrator
@@ -261,8 +261,8 @@ class RigidSimNode(Node):
     def swap(self, settings, prepared):
         """Run what :meth:`prepare` made for ``settings``, between two ticks (by the owner)."""
         if isinstance(prepared, tuple):
-            scene, world = prepared
-            self.owner.swap(settings, scene, world)
+            scene, world, wiring = prepared
+            self.owner.swap(settings, scene, world, wiring=wiring)
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
                                    'state, time 0, no wrench held')
@@ -286,14 +286,29 @@ class RigidSimNode(Node):
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
 
-    def wire_scene(self):
+    def plan_wiring(self, scene, settings):
+        """What wiring ``scene`` takes that grows with its bodies: topic names, messages.
+
+        Made in the owner's worker, beside the scene's world, so that the swap between two
+        ticks only makes and destroys topics (docs/design.md, "One owner of the World").
+        """
+        return (self.outputs.plan(scene, settings.world_frame, settings.frame_prefix,
+                                  settings.per_body_topics_limit),
+                self.inputs.plan(scene, settings.per_body_topics_limit),
+                self.goals.plan(scene))
+
+    def wire_scene(self, wiring):
         """Wire the running scene: new topics, messages, counters and diagnostics window.
 
-        Called by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only.
+        ``wiring`` is what :meth:`plan_wiring` made for it with the running settings. Called
+        by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only.
         """
+        outputs, inputs, goals = wiring
         self.outputs.per_body_limit = self.inputs.per_body_limit = \
             self.settings.per_body_topics_limit
-        self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
+        self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix,
+                          outputs)
         self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
-        self.inputs.wire(self.scene)
+        self.inputs.wire(self.scene, inputs)
+        self.goals.wire(self.scene, self.world, goals)
         self.health.restart(self.world.time)

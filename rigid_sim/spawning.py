@@ -13,7 +13,6 @@ the resets that put the scene back run one at a time, in the order they were ask
 from what the one before left; each edit is answered when it has been swapped in, or refused
 with the reason.
 """
-from collections import deque
 from dataclasses import replace
 import itertools
 from pathlib import Path
@@ -26,7 +25,7 @@ from rigid_sim.core import body_state
 from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.scene import build_world
 from rigid_sim.core.scene_edit import (
-    bodies_from_file, body_from_text, carry_over, check_name, placed, SpawnRefused,
+    bodies_from_file, body_from_text, check_name, placed, SpawnRefused,
     with_bodies, without_body)
 from rigid_sim.core.text import shown
 from rigid_sim.entity_services import reference_frame, result
@@ -95,7 +94,8 @@ class SceneEditor:
                 from rigid_sim.node import warm_up   # the node imports this module
                 warm_up(new_world, settings.integrator, logger,
                         imus=scene_imus(new_scene, new_world))
-                return scene, new_scene, new_world, kept, note
+                wiring = node.plan_wiring(new_scene, settings)
+                return scene, new_scene, new_world, kept, note, wiring
             return work
 
         def conclude(preparation):
@@ -106,11 +106,11 @@ class SceneEditor:
         """Run the edit's scene from the next tick on; the (scene, world, note) or a refusal."""
         if isinstance(result, SpawnRefused):
             return result
-        base, scene, world, kept, note = result
+        base, scene, world, kept, note, wiring = result
         if not self.edited:
             self.loaded, self.spawned = base, []
         self._edited = scene
-        self._node.owner.swap(scene=scene, world=world, kept=kept)
+        self._node.owner.swap(scene=scene, world=world, kept=kept, wiring=wiring)
         names = {body.name for body in scene.bodies}
         self.spawned = [name for name in self.spawned if name in names]
         return scene, world, note

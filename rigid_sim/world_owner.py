@@ -123,7 +123,8 @@ class WorldOwner:
             self._on_poll()
         return True
 
-    def swap(self, settings=None, scene=None, world=None, kept=None, integrator=None):
+    def swap(self, settings=None, scene=None, world=None, kept=None, integrator=None,
+             wiring=None):
         """Run what a job made from the next tick on: the one place any of it is replaced.
 
         Parameters
@@ -138,6 +139,9 @@ class WorldOwner:
             to the running one. None: ``world`` starts as built (a reload).
         integrator : rigid_sim.core.integrators.base.Integrator or None
             A new integrator for the running world (an integrator or tolerance change).
+        wiring : tuple
+            With ``scene``: what the node's ``plan_wiring`` made for it in the worker, so
+            that what is done here does not grow with the bodies but for array copies.
         """
         node = self._node
         previous = node.settings
@@ -148,7 +152,7 @@ class WorldOwner:
             node.settings = settings
         if world is not None:
             node.scene, node.world = scene, world
-            node.wire_scene()
+            node.wire_scene(wiring)
         if integrator is not None:
             node.world.integrator = integrator
         self.generation += 1
