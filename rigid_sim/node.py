@@ -301,14 +301,16 @@ class RigidSimNode(Node):
         """Wire the running scene: new topics, messages, counters and diagnostics window.
 
         ``wiring`` is what :meth:`plan_wiring` made for it with the running settings. Called
-        by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only.
+        by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only; returns what the
+        outputs replaced, for it to drop off the executor.
         """
         outputs, inputs, goals = wiring
         self.outputs.per_body_limit = self.inputs.per_body_limit = \
             self.settings.per_body_topics_limit
-        self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix,
-                          outputs)
+        replaced = self.outputs.wire(self.scene, self.settings.world_frame,
+                                     self.settings.frame_prefix, outputs)
         self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
         self.inputs.wire(self.scene, inputs)
         self.goals.wire(self.scene, self.world, goals)
         self.health.restart(self.world.time)
+        return replaced

@@ -90,7 +90,9 @@ class StateOutputs:
         """Replace the per-body publishers and messages by those of ``scene``.
 
         ``plan`` is what :meth:`plan` made for it (None: made now). The markers of a
-        previous scene are cleared in RViz (DELETEALL) first.
+        previous scene are cleared in RViz (DELETEALL) first. Returns the replaced messages
+        and publisher lists, for the caller to drop off the executor (freeing the messages
+        of thousands of bodies takes as long as making them).
         """
         if plan is None:
             plan = self.plan(scene, world_frame, frame_prefix, self.per_body_limit)
@@ -100,6 +102,7 @@ class StateOutputs:
             for publisher in publishers:
                 if publisher is not None:
                     self._node.destroy_publisher(publisher)
+        replaced = self._bodies
         if plan.awaited is None:
             self._awaited = {}
             self._bodies = [[self._made(slot, name) for slot, name in enumerate(row)]
@@ -107,7 +110,7 @@ class StateOutputs:
         else:
             self._awaited = plan.awaited
             self._bodies = [[None] * len(BODY_TOPICS) for _ in plan.names]
-        self.set_frame(scene, world_frame, frame_prefix, plan.frame)
+        return replaced, self.set_frame(scene, world_frame, frame_prefix, plan.frame)
 
     def _made(self, slot, name):
         return self._node.qos_overrides.create_publisher(BODY_TOPICS[slot][0], name,
@@ -129,13 +132,16 @@ class StateOutputs:
     def set_frame(self, scene, world_frame, frame_prefix, made=None):
         """Use the reused messages of ``scene`` for new frame names; resend tf_static.
 
-        ``made`` is what :meth:`frame_messages` made for them (None: made now).
+        ``made`` is what :meth:`frame_messages` made for them (None: made now). Returns the
+        replaced messages.
         """
         if made is None:
             made = self.frame_messages(scene, world_frame, frame_prefix)
+        replaced = self._messages, self._tf_message
         self._messages, self._tf_message, static = made
         self._tf.publish_static(static)
         self._listeners_due = -math.inf
+        return replaced
 
     @property
     def tf_available(self):

@@ -15,6 +15,7 @@ now, never swapped in. :meth:`WorldOwner.swap` is the only place the node's scen
 and settings are replaced, between two ticks (docs/design.md, "One owner of the World").
 """
 from collections import deque
+import queue
 import threading
 
 from rclpy.clock import Clock, ClockType
@@ -22,6 +23,17 @@ from rclpy.clock import Clock, ClockType
 from rigid_sim.core.scene_edit import carry_over
 
 POLL = 0.01   # s of wall time between two looks at a running job
+
+
+def _discard(replaced):
+    """Drop what a swap replaced, in a thread: freeing a large scene's messages takes long."""
+    while True:
+        replaced.get()
+
+
+_DISCARD = queue.SimpleQueue()
+threading.Thread(target=_discard, args=(_DISCARD,), daemon=True,
+                 name='rigid_sim discard').start()
 
 
 class Preparation:
@@ -151,8 +163,9 @@ class WorldOwner:
         if settings is not None:
             node.settings = settings
         if world is not None:
+            replaced = node.scene, node.world
             node.scene, node.world = scene, world
-            node.wire_scene(wiring)
+            _DISCARD.put((replaced, node.wire_scene(wiring)))
         if integrator is not None:
             node.world.integrator = integrator
         self.generation += 1
