@@ -65,7 +65,7 @@ class GoalInput:
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     def plan(self, scene):
-        """Resolved goal topic -> body index of ``scene`` (made in the worker for a swap)."""
+        """Return resolved goal topic -> body index of ``scene`` (the worker makes it)."""
         return {self._node.resolve_topic_name(f'~/{body.name}/goal'): index
                 for index, body in enumerate(scene.bodies)}
 

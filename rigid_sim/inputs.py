@@ -103,7 +103,7 @@ class BodyInputs:
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     def plan(self, scene, per_body_limit):
-        """What :meth:`wire` needs for ``scene``, made without touching topics.
+        """Make what :meth:`wire` needs for ``scene`` without touching topics.
 
         Returns the bodies' names, the (index, name) of the wrench topics subscribed to at
         once and the resolved names of the awaited ones; a scene's swap has it made in the

@@ -287,7 +287,7 @@ class RigidSimNode(Node):
         self._warn_on_slow_ticks_for_imus()
 
     def plan_wiring(self, scene, settings):
-        """What wiring ``scene`` takes that grows with its bodies: topic names, messages.
+        """Make what wiring ``scene`` takes that grows with its bodies: names, messages.
 
         Made in the owner's worker, beside the scene's world, so that the swap between two
         ticks only makes and destroys topics (docs/design.md, "One owner of the World").

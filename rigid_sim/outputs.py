@@ -73,7 +73,7 @@ class StateOutputs:
         self.wire(scene, world_frame, frame_prefix)
 
     def plan(self, scene, world_frame, frame_prefix, per_body_limit):
-        """What :meth:`wire` needs that grows with the bodies, made without touching topics.
+        """Make what :meth:`wire` needs that grows with the bodies, touching no topic.
 
         A scene's swap has it made in the owner's worker (per-body messages and resolved
         topic names take about 1 s for 5000 bodies), so that between two ticks only the at
@@ -124,7 +124,7 @@ class StateOutputs:
             self._bodies[index][slot] = self._made(slot, name)
 
     def frame_messages(self, scene, world_frame, frame_prefix):
-        """The reused messages of ``scene`` with these frame names, for :meth:`set_frame`."""
+        """Make the reused messages of ``scene`` with these frame names (:meth:`set_frame`)."""
         messages = conversions.StateMessages(scene.bodies, world_frame, frame_prefix)
         return (messages, self._tf.message(messages.transforms),
                 conversions.static_transforms(scene.bodies, frame_prefix, 0.0))

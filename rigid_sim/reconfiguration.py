@@ -92,7 +92,7 @@ class Reconfiguration:
         self._node.owner.submit(self._job)
 
     def _begin(self, scene, world, running):
-        """What the job prepares, decided when its turn comes: the newest parameters."""
+        """Decide what the job prepares when its turn comes: the newest parameters."""
         job, node = self._job, self._node
         job.scene_changed |= self._scene_asked or self.accepted.scene != running.scene
         self._scene_asked = False

@@ -107,7 +107,7 @@ def gate_spawn(monkeypatch):
 
 
 def assert_runs(sim, integrator, bodies):
-    """The world has ``bodies`` and is stepped by an ``integrator`` built for it."""
+    """Assert the world has ``bodies``, stepped by an ``integrator`` built for it."""
     world = sim.node.world
     assert world.bodies.names == bodies
     assert sim.node.settings.integrator == integrator == world.integrator.name
