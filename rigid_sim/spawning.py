@@ -269,7 +269,7 @@ class SpawnServices:
             if restore and editor.edited:
                 loaded = editor.loaded
                 return lambda scene: (loaded, [], '')
-            if remove_spawned and editor.spawned:
+            if remove_spawned and editor.edited and editor.spawned:   # not before a reload
                 return _without(set(editor.spawned))
             return None
         editor.submit_planned(plan, done)

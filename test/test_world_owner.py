@@ -245,3 +245,18 @@ def test_diagnostics_say_paused_while_paused(sim):
     sim.step(1)
     assert probe.diagnostics.now().message == 'running'
     assert np.isfinite(sim.node.world.y).all()
+
+
+def test_a_reload_forgets_the_spawned_bodies_for_resets(sim, tmp_path):
+    """After a reload the scene's own body of a spawned body's name is not 'spawned'."""
+    answers = ask_spawn(sim)
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    with_ball = tmp_path / 'with_ball.yaml'
+    with_ball.write_text(OTHER + '  - ' + BALL + '\n')
+    assert sim.set_parameters(scene=str(with_ball))[0].successful
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+    reset = ask_reset(sim, ResetSimulation.Request.SCOPE_SPAWNED)
+    finish(sim)
+    assert reset[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('crate', 'ball')
