@@ -233,22 +233,26 @@ class SpawnServices:
 
     def _on_delete(self, request, response, reply):
         Result = si_msg.Result
-        names = self._node.world.bodies.names
-        if request.entity not in names:
-            response.result = result(Result.RESULT_NOT_FOUND,
-                                     f'no entity {shown(request.entity)}')
+        entity, missing = request.entity, f'no entity {shown(request.entity)}'
+        # With edits pending, the body may come or go before this one's turn: decided then.
+        if entity not in self._node.world.bodies.names and not self._node.owner.busy:
+            response.result = result(Result.RESULT_NOT_FOUND, missing)
             return response
-        entity = request.entity
 
         def build(scene):
-            index = [body.name for body in scene.bodies].index(entity)
+            names = [body.name for body in scene.bodies]
+            if entity not in names:
+                raise SpawnRefused('not_found', missing)
+            index = names.index(entity)
             new, dropped = without_body(scene, index)
             kept = [(i, i - (i > index)) for i in range(len(scene.bodies)) if i != index]
             return new, kept, f'{dropped} springs went with it' if dropped else ''
 
         def done(outcome):
             failed = isinstance(outcome, SpawnRefused)
-            response.result = (result(Result.RESULT_OPERATION_FAILED, str(outcome)) if failed
+            code = (Result.RESULT_NOT_FOUND if failed and outcome.kind == 'not_found'
+                    else Result.RESULT_OPERATION_FAILED)
+            response.result = (result(code, str(outcome)) if failed
                                else result(Result.RESULT_OK, outcome[2]))
             if not failed:
                 self._changed()

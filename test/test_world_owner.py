@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from rclpy.parameter import Parameter
 from simulation_interfaces.msg import Result
-from simulation_interfaces.srv import ResetSimulation, SpawnEntity
+from simulation_interfaces.srv import DeleteEntity, ResetSimulation, SpawnEntity
 
 import ros_tools
 from rigid_sim import conversions, node as node_module, spawning
@@ -260,3 +260,22 @@ def test_a_reload_forgets_the_spawned_bodies_for_resets(sim, tmp_path):
     finish(sim)
     assert reset[0].result.result == Result.RESULT_OK
     assert sim.node.world.bodies.names == ('crate', 'ball')
+
+
+def test_deleting_a_body_whose_spawn_is_pending_deletes_it_after_the_spawn(sim, monkeypatch):
+    gate = gate_spawn(monkeypatch)
+    spawned = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)
+    deleted = []
+    at_once = sim.node.sim_interfaces.spawns._on_delete(
+        DeleteEntity.Request(entity='ball'), DeleteEntity.Response(), deleted.append)
+    assert at_once is spawning.deferred.LATER, 'answered before the spawn it follows'
+    sim.settle()
+    gate.open()
+    finish(sim)
+    assert spawned[0].result.result == Result.RESULT_OK
+    assert deleted[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('box',)
+    missing = sim.node.sim_interfaces.spawns._on_delete(   # nothing pending: answered now
+        DeleteEntity.Request(entity='ball'), DeleteEntity.Response(), None)
+    assert missing.result.result == Result.RESULT_NOT_FOUND
