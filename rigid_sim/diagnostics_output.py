@@ -1,7 +1,7 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
 """The node's /diagnostics: one status about once a second, over one window of ticks."""
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
@@ -68,6 +68,8 @@ class DiagnosticsOutput:
                   **dict(extra)}
         period = 1.0 / settings.rate if settings.rate > 0.0 else None
         level, summary = health(self.stats, period, dropped, since_tick)
+        if paused and level == DiagnosticStatus.OK:
+            summary = 'paused'   # integration is not running; the ticks that publish are
         self._publisher.publish(conversions.diagnostics(
             f'{self._node.get_name()}: physics', world.time, level, summary, values))
         self.restart(world.time)

@@ -64,16 +64,23 @@ class GoalInput:
         node.create_timer(DEMAND_REFRESH, self.subscribe_on_demand,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
 
-    def wire(self, scene, world):
-        """Take ``scene`` and its ``world``: forget goals, await its bodies' goal topics."""
+    def plan(self, scene):
+        """Return resolved goal topic -> body index of ``scene`` (the worker makes it)."""
+        return {self._node.resolve_topic_name(f'~/{body.name}/goal'): index
+                for index, body in enumerate(scene.bodies)}
+
+    def wire(self, scene, world, plan=None):
+        """Take ``scene`` and its ``world``: forget goals, await its bodies' goal topics.
+
+        ``plan`` is what :meth:`plan` made for ``scene`` (None: made now).
+        """
         for subscription in self._subscriptions:
             self._node.destroy_subscription(subscription)
         for publisher in self._paths.values():
             self._node.destroy_publisher(publisher)
         self._subscriptions, self._paths, self._inbox, self._latest = [], {}, {}, {}
         self._scene, self._world, self._solver, self._time = scene, world, None, world.time
-        self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/goal'): index
-                         for index, body in enumerate(scene.bodies)}
+        self._awaited = self.plan(scene) if plan is None else plan
 
     def subscribe_on_demand(self):
         """Subscribe to every goal topic that has a publisher in the graph now."""

@@ -42,12 +42,22 @@ def held_wrenches(world):
 
 
 class Refusals:
-    """Refused input messages (a count per body, the last reason) and superseded ones."""
+    """Refused input messages (a count per body, the last reason) and superseded ones.
+
+    Counted since the node started: a scene edit or reload adds the new bodies' names and
+    keeps every count, so /diagnostics never reports fewer refusals than it did.
+    """
 
     def __init__(self, names):
         self.counts = {name: 0 for name in names}
         self.superseded = {name: 0 for name in names}
         self.last = ''
+
+    def track(self, names):
+        """Count for ``names`` too (the bodies of a new scene), keeping every count so far."""
+        for name in names:
+            self.counts.setdefault(name, 0)
+            self.superseded.setdefault(name, 0)
 
     def add(self, name, topic, error, logger):
         """Count one refused message on ``~/<name>/<topic>`` and warn, throttled."""
@@ -92,23 +102,38 @@ class BodyInputs:
         node.create_timer(DEMAND_REFRESH, self.subscribe_on_demand,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
 
-    def wire(self, scene):
-        """Subscribe to the wrench topic of every body of ``scene`` that takes wrenches."""
-        for subscription in self._subscriptions:
-            self._node.destroy_subscription(subscription)
+    def plan(self, scene, per_body_limit):
+        """Make what :meth:`wire` needs for ``scene`` without touching topics.
+
+        Returns the bodies' names, the (index, name) of the wrench topics subscribed to at
+        once and the resolved names of the awaited ones; a scene's swap has it made in the
+        owner's worker, since resolving a name per body and topic grows with the bodies.
+        """
         wrenched = [(index, body) for index, body in enumerate(scene.bodies)
                     if body.wrench_input]
-        at_once = len(scene.bodies) <= self.per_body_limit
-        self._subscriptions = [self._subscribe(WrenchStamped, 'wrench', index, body.name)
-                               for index, body in wrenched if at_once]
+        at_once = len(scene.bodies) <= per_body_limit
         awaited = [(index, body, topic) for index, body in enumerate(scene.bodies)
                    for topic, _ in STATE_TOPICS]
         awaited += [] if at_once else [(index, body, 'wrench') for index, body in wrenched]
-        self._awaited = {self._node.resolve_topic_name(f'~/{body.name}/{topic}'): (topic, index)
-                         for index, body, topic in awaited}
-        self._names = [body.name for body in scene.bodies]
+        return ([body.name for body in scene.bodies],
+                [(index, body.name) for index, body in wrenched if at_once],
+                {self._node.resolve_topic_name(f'~/{body.name}/{topic}'): (topic, index)
+                 for index, body, topic in awaited})
+
+    def wire(self, scene, plan=None):
+        """Subscribe to the wrench topic of every body of ``scene`` that takes wrenches.
+
+        ``plan`` is what :meth:`plan` made for it (None: made now).
+        """
+        if plan is None:
+            plan = self.plan(scene, self.per_body_limit)
+        for subscription in self._subscriptions:
+            self._node.destroy_subscription(subscription)
+        self._names, subscribed, self._awaited = plan
+        self._subscriptions = [self._subscribe(WrenchStamped, 'wrench', index, name)
+                               for index, name in subscribed]
         self.clear()
-        self.refusals = Refusals(self._names)
+        self.refusals.track(self._names)
 
     def _subscribe(self, kind, topic, index, name):
         made = []

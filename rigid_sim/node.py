@@ -30,6 +30,7 @@ from rigid_sim.qos_overrides import QosOverrides
 from rigid_sim.reconfiguration import Reconfiguration
 from rigid_sim.resources import find_scene
 from rigid_sim.tick_loop import TickLoop
+from rigid_sim.world_owner import WorldOwner
 
 __all__ = ['LISTENER_REFRESH', 'NODE_NAME', 'RigidSimNode']
 NODE_NAME = 'rigid_sim'
@@ -137,6 +138,7 @@ class RigidSimNode(Node):
         self.loop.set_paused(self.control.paused)
         self.health = DiagnosticsOutput(self, self.publish_diagnostics, self.world.time)
         self.qos_overrides.finish_start()
+        self.owner = WorldOwner(self)   # the only one that replaces scene, world, settings
         self.reconfiguration = Reconfiguration(self)
         self._warn_on_slow_ticks_for_imus()
         self.sim_interfaces = sim_interfaces.serve(self)   # None without the package
@@ -241,34 +243,31 @@ class RigidSimNode(Node):
         check_frames(self.scene, settings)
 
     def prepare(self, settings, scene_changed):
-        """Build what ``settings`` need and compile its kernels (in the reconfiguration worker).
+        """Build what ``settings`` need and compile its kernels (in the owner's worker).
 
-        Returns a new (scene, world) when ``scene_changed``, else an integrator for the
-        running world. Nothing the node runs is changed.
+        Returns a new (scene, world, wiring) when ``scene_changed``, else an integrator for the
+        running world, which stays the running one while the job runs (the owner's jobs run
+        one at a time and only they replace it). Nothing the node runs is changed.
         """
         if scene_changed:
             scene, world = load(settings)
             warm_up(world, settings.integrator, self.get_logger(),
                     imus=scene_imus(scene, world))
-            return scene, world
+            return scene, world, self.plan_wiring(scene, settings)
         integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
         warm_up(self.world, settings.integrator, self.get_logger(), integrator)
         return integrator
 
     def swap(self, settings, prepared):
-        """Run what :meth:`prepare` made for ``settings``, between two ticks."""
-        previous = self.settings
-        self.settings = settings
+        """Run what :meth:`prepare` made for ``settings``, between two ticks (by the owner)."""
         if isinstance(prepared, tuple):
-            self.check_frames(settings)
-            self.scene, self.world = prepared
-            self._wire_scene()
+            scene, world, wiring = prepared
+            self.owner.swap(settings, scene, world, wiring=wiring)
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
                                    'state, time 0, no wrench held')
         else:
-            self.world.integrator = prepared
-        self.apply(previous)
+            self.owner.swap(settings, integrator=prepared)
 
     def apply(self, previous):
         """Act on the change of the settings from ``previous`` to the running ones."""
@@ -287,16 +286,31 @@ class RigidSimNode(Node):
         self._warn_on_frame_mismatch()
         self._warn_on_slow_ticks_for_imus()
 
-    def replace_scene(self, scene, world):
-        """Run ``scene`` and ``world`` from the next tick on (bodies spawned or deleted)."""
-        self.scene, self.world = scene, world
-        self._wire_scene()
+    def plan_wiring(self, scene, settings):
+        """Make what wiring ``scene`` takes that grows with its bodies: names, messages.
 
-    def _wire_scene(self):
-        """Wire the current scene: new topics, messages, counters and diagnostics window."""
+        Made in the owner's worker, beside the scene's world, so that the swap between two
+        ticks only makes and destroys topics (docs/design.md, "One owner of the World").
+        """
+        return (self.outputs.plan(scene, settings.world_frame, settings.frame_prefix,
+                                  settings.per_body_topics_limit),
+                self.inputs.plan(scene, settings.per_body_topics_limit),
+                self.goals.plan(scene))
+
+    def wire_scene(self, wiring):
+        """Wire the running scene: new topics, messages, counters and diagnostics window.
+
+        ``wiring`` is what :meth:`plan_wiring` made for it with the running settings. Called
+        by the owner's :meth:`~rigid_sim.world_owner.WorldOwner.swap` only; returns what the
+        outputs replaced, for it to drop off the executor.
+        """
+        outputs, inputs, goals = wiring
         self.outputs.per_body_limit = self.inputs.per_body_limit = \
             self.settings.per_body_topics_limit
-        self.outputs.wire(self.scene, self.settings.world_frame, self.settings.frame_prefix)
+        replaced = self.outputs.wire(self.scene, self.settings.world_frame,
+                                     self.settings.frame_prefix, outputs)
         self.imu_outputs.wire(self.scene, self.world, self.settings.frame_prefix)
-        self.inputs.wire(self.scene)
+        self.inputs.wire(self.scene, inputs)
+        self.goals.wire(self.scene, self.world, goals)
         self.health.restart(self.world.time)
+        return replaced

@@ -9,6 +9,7 @@ per topic, which at thousands of topics would cost more than the tick. A scene o
 start-up and the executor, see docs/ros_notes.md): each is made at such a refresh once a
 subscriber to its topic appears in the graph; the PoseArray and the markers are always there.
 """
+from collections import namedtuple
 import math
 import time
 
@@ -29,6 +30,10 @@ LISTENER_REFRESH = 0.5
 # spin, which with thousands of bodies costs more than the physics (docs/performance.md).
 NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 BODY_TOPICS = ((PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom'))
+# What StateOutputs.plan makes: the per-body topic names ('~/<body>/<topic>', per body in
+# BODY_TOPICS order), resolved name -> (body, slot) of those made on demand (None: all at
+# once) and the frame_messages.
+OutputPlan = namedtuple('OutputPlan', 'names awaited frame')
 
 
 class StateOutputs:
@@ -67,27 +72,45 @@ class StateOutputs:
         self._listeners_due = -math.inf
         self.wire(scene, world_frame, frame_prefix)
 
-    def wire(self, scene, world_frame, frame_prefix):
+    def plan(self, scene, world_frame, frame_prefix, per_body_limit):
+        """Make what :meth:`wire` needs that grows with the bodies, touching no topic.
+
+        A scene's swap has it made in the owner's worker (per-body messages and resolved
+        topic names take about 1 s for 5000 bodies), so that between two ticks only the at
+        most ``per_body_limit`` publishers are made.
+        """
+        names = [[f'~/{body.name}/{topic}' for _, topic in BODY_TOPICS] for body in scene.bodies]
+        awaited = None
+        if len(scene.bodies) > per_body_limit:
+            awaited = {self._node.resolve_topic_name(name): (index, slot)
+                       for index, row in enumerate(names) for slot, name in enumerate(row)}
+        return OutputPlan(names, awaited, self.frame_messages(scene, world_frame, frame_prefix))
+
+    def wire(self, scene, world_frame, frame_prefix, plan=None):
         """Replace the per-body publishers and messages by those of ``scene``.
 
-        The markers of a previous scene are cleared in RViz (DELETEALL) first.
+        ``plan`` is what :meth:`plan` made for it (None: made now). The markers of a
+        previous scene are cleared in RViz (DELETEALL) first. Returns the replaced messages
+        and publisher lists, for the caller to drop off the executor (freeing the messages
+        of thousands of bodies takes as long as making them).
         """
+        if plan is None:
+            plan = self.plan(scene, world_frame, frame_prefix, self.per_body_limit)
         if self._messages is not None:
             self._markers.publish(conversions.delete_all_markers())
         for publishers in self._bodies:
             for publisher in publishers:
                 if publisher is not None:
                     self._node.destroy_publisher(publisher)
-        names = [[f'~/{body.name}/{topic}' for _, topic in BODY_TOPICS] for body in scene.bodies]
-        self._awaited = {}
-        if len(scene.bodies) <= self.per_body_limit:
+        replaced = self._bodies
+        if plan.awaited is None:
+            self._awaited = {}
             self._bodies = [[self._made(slot, name) for slot, name in enumerate(row)]
-                            for row in names]
+                            for row in plan.names]
         else:
-            self._bodies = [[None] * len(BODY_TOPICS) for _ in scene.bodies]
-            self._awaited = {self._node.resolve_topic_name(name): (index, slot)
-                             for index, row in enumerate(names) for slot, name in enumerate(row)}
-        self.set_frame(scene, world_frame, frame_prefix)
+            self._awaited = plan.awaited
+            self._bodies = [[None] * len(BODY_TOPICS) for _ in plan.names]
+        return replaced, self.set_frame(scene, world_frame, frame_prefix, plan.frame)
 
     def _made(self, slot, name):
         return self._node.qos_overrides.create_publisher(BODY_TOPICS[slot][0], name,
@@ -100,12 +123,25 @@ class StateOutputs:
             index, slot = self._awaited.pop(name)
             self._bodies[index][slot] = self._made(slot, name)
 
-    def set_frame(self, scene, world_frame, frame_prefix):
-        """Rebuild the reused messages of ``scene`` for new frame names; resend tf_static."""
-        self._messages = conversions.StateMessages(scene.bodies, world_frame, frame_prefix)
-        self._tf_message = self._tf.message(self._messages.transforms)
-        self._tf.publish_static(conversions.static_transforms(scene.bodies, frame_prefix, 0.0))
+    def frame_messages(self, scene, world_frame, frame_prefix):
+        """Make the reused messages of ``scene`` with these frame names (:meth:`set_frame`)."""
+        messages = conversions.StateMessages(scene.bodies, world_frame, frame_prefix)
+        return (messages, self._tf.message(messages.transforms),
+                conversions.static_transforms(scene.bodies, frame_prefix, 0.0))
+
+    def set_frame(self, scene, world_frame, frame_prefix, made=None):
+        """Use the reused messages of ``scene`` for new frame names; resend tf_static.
+
+        ``made`` is what :meth:`frame_messages` made for them (None: made now). Returns the
+        replaced messages.
+        """
+        if made is None:
+            made = self.frame_messages(scene, world_frame, frame_prefix)
+        replaced = self._messages, self._tf_message
+        self._messages, self._tf_message, static = made
+        self._tf.publish_static(static)
         self._listeners_due = -math.inf
+        return replaced
 
     @property
     def tf_available(self):

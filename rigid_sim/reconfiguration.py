@@ -10,38 +10,20 @@ swapped in between two ticks and logged. A change the work refuses (a malformed 
 changes nothing: the parameters are set back to what runs, and the reason is logged and
 shown on /diagnostics. Every other change applies at once. Changes made while a preparation
 runs are prepared together once it ends, so what runs is always what was asked for last.
+The preparation is a job of the node's :class:`~rigid_sim.world_owner.WorldOwner`, in turn
+with scene edits, and swapped in by it.
 """
 from dataclasses import replace
-import threading
 
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.clock import Clock, ClockType
 from rclpy.parameter import Parameter
 
 from rigid_sim import parameters
 from rigid_sim.core.text import shown
 from rigid_sim.resources import find_scene
+from rigid_sim.world_owner import Job
 
 HEAVY = ('scene', 'integrator', 'tolerance')   # settings whose change needs preparing
-POLL = 0.01   # s of wall time between two looks at a running preparation
-
-
-class Preparation:
-    """``work()`` run in a daemon thread (a stop never waits for it); its result or error."""
-
-    def __init__(self, settings, work):
-        self.settings = settings
-        self.result = self.error = None
-        self.finished = threading.Event()
-        self._work = work
-        threading.Thread(target=self._run, daemon=True, name='rigid_sim prepare').start()
-
-    def _run(self):
-        try:
-            self.result = self._work()
-        except Exception as error:  # noqa: B902  reported as the refusal, never raised
-            self.error = error
-        self.finished.set()
 
 
 class Reconfiguration:
@@ -50,8 +32,9 @@ class Reconfiguration:
     Parameters
     ----------
     node : rigid_sim.node.RigidSimNode
-        Provides ``settings``, ``prepare(settings, scene_changed)`` (the work, run in the
-        worker), ``swap(settings, prepared)`` and ``apply(previous)`` (light changes).
+        Provides ``settings``, ``owner`` (the WorldOwner that runs the preparations),
+        ``prepare(settings, scene_changed)`` (the work, run in the worker),
+        ``swap(settings, prepared)`` and ``apply(previous)`` (light changes).
     """
 
     def __init__(self, node):
@@ -59,19 +42,16 @@ class Reconfiguration:
         self.accepted = node.settings   # what the parameters say; node.settings is what runs
         self.last_refusal = ''
         self._proposed = None
-        self._preparation = None
+        self._job = None                # the preparation asked for, queued or running
         self._reverting = False
         self._scene_asked = False       # the scene was set again since the last preparation
-        self._poll = node.create_timer(POLL, self._on_poll,
-                                       clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self._poll.cancel()
         node.add_on_set_parameters_callback(self._on_set)
         node.add_post_set_parameters_callback(self._on_post_set)
 
     @property
     def preparing(self):
-        """Return whether a preparation runs or waits to be swapped in."""
-        return self._preparation is not None
+        """Return whether a preparation waits, runs or waits to be swapped in."""
+        return self._job is not None
 
     def _on_set(self, changes):
         try:
@@ -94,6 +74,8 @@ class Reconfiguration:
         previous = node.settings
         node.settings = replace(proposed, **{name: getattr(previous, name) for name in HEAVY})
         node.apply(previous)
+        if node.settings != previous:   # a job prepared with the settings before is stale
+            node.owner.changed()
         if self._reverting:
             return
         if self._scene_asked or self._heavy_change(previous):
@@ -103,46 +85,41 @@ class Reconfiguration:
         return any(getattr(self.accepted, name) != getattr(running, name) for name in HEAVY)
 
     def _start(self):
-        if self._preparation is not None:   # started again with the newest once it ends
+        if self._job is not None:   # it prepares the newest when it begins, or again after
             return
-        scene_changed, self._scene_asked = self._scene_asked, False
-        scene_changed |= self.accepted.scene != self._node.settings.scene
-        settings = self.accepted
-        self._preparation = Preparation(
-            settings, lambda: self._node.prepare(settings, scene_changed))
-        self._preparation.scene_changed = scene_changed
-        self._poll.reset()
+        self._job = Job(self._begin, self._conclude)
+        self._job.scene_changed = False
+        self._node.owner.submit(self._job)
 
-    def _on_poll(self):
-        if self._preparation is not None and self._preparation.finished.is_set():
-            self._conclude()
+    def _begin(self, scene, world, running):
+        """Decide what the job prepares when its turn comes: the newest parameters."""
+        job, node = self._job, self._node
+        job.scene_changed |= self._scene_asked or self.accepted.scene != running.scene
+        self._scene_asked = False
+        settings = job.settings = self.accepted
+        scene_changed = job.scene_changed
+        return lambda: node.prepare(settings, scene_changed)
 
     def wait(self, timeout=None):
         """Block until the running preparation (if any) is swapped in or refused; whether it is.
 
         For tests and embedding code that tick the node themselves.
         """
-        while self._preparation is not None:
-            if not self._preparation.finished.wait(timeout):
-                return False
-            self._conclude()
-        return True
+        return self._node.owner.wait(timeout)
 
-    def _conclude(self):
-        done, self._preparation = self._preparation, None
-        self._poll.cancel()
-        newer = done.settings != self.accepted or self._scene_asked
-        if done.error is None and not newer:
-            self._node.swap(done.settings, done.result)
-        elif done.error is not None and not newer:
-            self._refuse(done)
-        if newer:
+    def _conclude(self, done):
+        job, self._job = self._job, None
+        if job.settings != self.accepted or self._scene_asked:   # asked again meanwhile
             self._start()
+        elif done.error is None:
+            self._node.swap(job.settings, done.result)
+        else:
+            self._refuse(job, done.error)
 
-    def _refuse(self, done):
-        what = 'scene ' + shown(done.settings.scene) if done.scene_changed else (
-            f'integrator {done.settings.integrator} (tolerance {done.settings.tolerance:g})')
-        self.last_refusal = f'{what}: {done.error}'  # the loader cuts what it quotes
+    def _refuse(self, job, error):
+        what = 'scene ' + shown(job.settings.scene) if job.scene_changed else (
+            f'integrator {job.settings.integrator} (tolerance {job.settings.tolerance:g})')
+        self.last_refusal = f'{what}: {error}'  # the loader cuts what it quotes
         running = self._node.settings
         self._node.get_logger().error(
             f'refused {self.last_refusal}; still running {shown(running.scene)} with '

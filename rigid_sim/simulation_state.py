@@ -186,12 +186,9 @@ class SimulationInterfaces:
             reset_parts(node, state=bool(scope & r.SCOPE_STATE), time=bool(scope & r.SCOPE_TIME))
             self.stopped = scope == r.SCOPE_ALL and node.paused
             done(None)
-        if scope == r.SCOPE_ALL and self.editor.edited:
-            self.spawns.restore_loaded(then)
-        elif scope & r.SCOPE_SPAWNED and self.editor.spawned:
-            self.spawns.remove_spawned(then)
-        else:
-            then(None)
+        # In turn with the edits and reloads asked before it: a body whose spawn is still
+        # being prepared is removed too, and a reset never works on a scene about to go.
+        self.spawns.reset_scene(scope == r.SCOPE_ALL, bool(scope & r.SCOPE_SPAWNED), then)
         return deferred.LATER
 
 

@@ -4,33 +4,33 @@
 
 An edit builds a new Scene and World (:mod:`rigid_sim.core.scene_edit`): reading a mesh,
 computing inertias and compiling the kernels of a new effect set may take seconds, so that
-part runs in a worker thread while the running world ticks on, and the executor looks every
-``POLL`` seconds whether it is done. Then, between two ticks, the stored input messages are
-applied to the running world, its state, time and held wrenches are carried into the new one
-and the node runs the new scene: a spawned body has every per-body topic from that tick on,
-a deleted one has none. Edits run one at a time, in the order they were asked for; each is
-answered when it has been swapped in, or refused with the reason.
+part runs in a worker thread while the running world ticks on. Then, between two ticks, the
+stored input messages are applied to the running world, its state, time and held wrenches
+are carried into the new one and the node runs the new scene: a spawned body has every
+per-body topic from that tick on, a deleted one has none. An edit is a job of the node's
+:class:`~rigid_sim.world_owner.WorldOwner`: edits, parameter changes that need preparing and
+the resets that put the scene back run one at a time, in the order they were asked for, each
+from what the one before left; each edit is answered when it has been swapped in, or refused
+with the reason.
 """
-from collections import deque
 from dataclasses import replace
 import itertools
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 import numpy as np
-from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
 from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.scene import build_world
 from rigid_sim.core.scene_edit import (
-    bodies_from_file, body_from_text, carry_over, check_name, placed, SpawnRefused,
+    bodies_from_file, body_from_text, check_name, placed, SpawnRefused,
     with_bodies, without_body)
 from rigid_sim.core.text import shown
 from rigid_sim.entity_services import reference_frame, result
-from rigid_sim.reconfiguration import Preparation
 from rigid_sim.resources import find_scene
+from rigid_sim.world_owner import Job
 
 from simulation_interfaces import msg as si_msg, srv as si_srv
 
@@ -39,30 +39,17 @@ SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',
                'parse': 'RESOURCE_PARSE_ERROR', 'missing_asset': 'MISSING_ASSETS',
                'pose': 'INVALID_POSE', 'no_resource': 'NO_RESOURCE'}
 
-POLL = 0.01   # s of wall time between two looks at a running edit
 
-
-class Edit:
-    """One scene edit: ``build(scene)`` off the executor, then ``done(result)`` on it.
-
-    ``build`` returns (new scene, kept, note): ``kept`` pairs old and new body indices,
-    ``note`` words the answer. ``done`` gets ``(scene, world, note)`` or the SpawnRefused.
-    """
-
-    def __init__(self, build, done):
-        self.build, self.done = build, done
-        self.preparation = None   # the worker that builds it, once started
-
-    def outcome(self):
-        """Return what the worker made, or the SpawnRefused any failure of it becomes."""
-        error = self.preparation.error
-        if error is None or isinstance(error, SpawnRefused):
-            return error or self.preparation.result
-        return SpawnRefused('parse', f'{type(error).__name__}: {error}')
+def outcome(preparation):
+    """Return what an edit's worker made, or the SpawnRefused any failure of it becomes."""
+    error = preparation.error
+    if error is None or isinstance(error, SpawnRefused):
+        return error or preparation.result
+    return SpawnRefused('parse', f'{type(error).__name__}: {error}')
 
 
 class SceneEditor:
-    """Runs :class:`Edit` s for ``node`` (a RigidSimNode) in a worker, swaps at a tick boundary.
+    """Scene edits for ``node`` (a RigidSimNode), as jobs of its WorldOwner.
 
     Also remembers which bodies were spawned and the scene as loaded, for the resets of
     ResetSimulation.
@@ -70,14 +57,9 @@ class SceneEditor:
 
     def __init__(self, node):
         self._node = node
-        self._queue = deque()
-        self._running = None
-        self._edited = None      # the last scene an edit made, while it runs
+        self._edited = None      # the last scene an edit made
         self.loaded = None       # the scene before the first edit (a reload forgets edits)
         self.spawned = []        # names of the bodies spawned into the running scene
-        self._poll = node.create_timer(POLL, self._on_poll,
-                                       clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self._poll.cancel()
 
     @property
     def edited(self):
@@ -85,63 +67,57 @@ class SceneEditor:
         return self._edited is not None and self._edited is self._node.scene
 
     def submit(self, build, done):
-        """Queue an edit; it starts when the ones before it are done."""
-        self._queue.append(Edit(build, done))
-        if self._running is None:
-            self._start()
+        """Queue an edit: ``build(scene)`` off the executor, then ``done(outcome)`` on it.
 
-    def _start(self):
-        edit = self._running = self._queue.popleft()
+        ``build`` returns (new scene, kept, note): ``kept`` pairs old and new body indices,
+        ``note`` words the answer. ``done`` gets ``(scene, world, note)`` or the SpawnRefused.
+        """
+        self.submit_planned(lambda scene: build, done)
+
+    def submit_planned(self, plan, done):
+        """Queue an edit decided when its turn comes: ``plan(scene)`` is its build or None.
+
+        With None nothing is prepared or swapped and ``done(None)`` is called then.
+        """
         node = self._node
-        scene, settings, logger = node.scene, node.settings, node.get_logger()
 
-        def work():   # any failure refuses the edit (Edit.outcome), never raises
-            new_scene, kept, note = edit.build(scene)
-            world = build_world(new_scene, settings.integrator, settings.tolerance,
-                                settings.error_control)
-            from rigid_sim.node import warm_up   # the node imports this module
-            warm_up(world, settings.integrator, logger, imus=scene_imus(new_scene, world))
-            return scene, new_scene, world, kept, note
+        def begin(scene, world, settings):
+            build = plan(scene)
+            if build is None:
+                return None
+            logger = node.get_logger()
 
-        edit.preparation = Preparation(settings, work)
-        self._poll.reset()
+            def work():   # any failure refuses the edit (outcome), never raises
+                new_scene, kept, note = build(scene)
+                new_world = build_world(new_scene, settings.integrator, settings.tolerance,
+                                        settings.error_control)
+                from rigid_sim.node import warm_up   # the node imports this module
+                warm_up(new_world, settings.integrator, logger,
+                        imus=scene_imus(new_scene, new_world))
+                wiring = node.plan_wiring(new_scene, settings)
+                return scene, new_scene, new_world, kept, note, wiring
+            return work
 
-    def _on_poll(self):
-        edit = self._running
-        if edit is None or not edit.preparation.finished.is_set():
-            return
-        self._running = None
-        self._poll.cancel()
-        edit.done(self._swap(edit.outcome()))
-        if self._queue:
-            self._start()
+        def conclude(preparation):
+            done(None if preparation is None else self._swap(outcome(preparation)))
+        node.owner.submit(Job(begin, conclude))
 
     def _swap(self, result):
         """Run the edit's scene from the next tick on; the (scene, world, note) or a refusal."""
         if isinstance(result, SpawnRefused):
             return result
-        base, scene, world, kept, note = result
-        node = self._node
-        if node.scene is not base:   # a parameter reload replaced the scene meanwhile
-            return SpawnRefused('parse', 'the scene was reloaded while the edit was prepared; '
-                                         'nothing changed, ask again')
+        base, scene, world, kept, note, wiring = result
         if not self.edited:
             self.loaded, self.spawned = base, []
-        node.inputs.apply(node.world, node.scene, node.settings)   # nothing received is lost
-        carry_over(node.world, world, kept)
         self._edited = scene
-        node.replace_scene(scene, world)
+        self._node.owner.swap(scene=scene, world=world, kept=kept, wiring=wiring)
         names = {body.name for body in scene.bodies}
         self.spawned = [name for name in self.spawned if name in names]
         return scene, world, note
 
     def wait(self, timeout=None):
         """Block until every queued edit is swapped in or refused (tests that tick themselves)."""
-        while self._running is not None:
-            if not self._running.preparation.finished.wait(timeout):
-                return False
-            self._on_poll()
-        return True
+        return self._node.owner.wait(timeout)
 
 
 def scene_path(uri):
@@ -257,22 +233,26 @@ class SpawnServices:
 
     def _on_delete(self, request, response, reply):
         Result = si_msg.Result
-        names = self._node.world.bodies.names
-        if request.entity not in names:
-            response.result = result(Result.RESULT_NOT_FOUND,
-                                     f'no entity {shown(request.entity)}')
+        entity, missing = request.entity, f'no entity {shown(request.entity)}'
+        # With edits pending, the body may come or go before this one's turn: decided then.
+        if entity not in self._node.world.bodies.names and not self._node.owner.busy:
+            response.result = result(Result.RESULT_NOT_FOUND, missing)
             return response
-        entity = request.entity
 
         def build(scene):
-            index = [body.name for body in scene.bodies].index(entity)
+            names = [body.name for body in scene.bodies]
+            if entity not in names:
+                raise SpawnRefused('not_found', missing)
+            index = names.index(entity)
             new, dropped = without_body(scene, index)
             kept = [(i, i - (i > index)) for i in range(len(scene.bodies)) if i != index]
             return new, kept, f'{dropped} springs went with it' if dropped else ''
 
         def done(outcome):
             failed = isinstance(outcome, SpawnRefused)
-            response.result = (result(Result.RESULT_OPERATION_FAILED, str(outcome)) if failed
+            code = (Result.RESULT_NOT_FOUND if failed and outcome.kind == 'not_found'
+                    else Result.RESULT_OPERATION_FAILED)
+            response.result = (result(code, str(outcome)) if failed
                                else result(Result.RESULT_OK, outcome[2]))
             if not failed:
                 self._changed()
@@ -280,23 +260,32 @@ class SpawnServices:
         self._editor.submit(build, done)
         return deferred.LATER
 
-    def restore_loaded(self, done):
-        """Put back the scene as loaded before the first edit; ``done(outcome)``."""
-        loaded = self._editor.loaded
+    def reset_scene(self, restore, remove_spawned, done):
+        """Queue the scene part of a reset behind every edit asked before it; ``done(outcome)``.
 
-        def build(scene):
-            return loaded, [], ''
-        self._editor.submit(build, done)
+        When its turn comes: with ``restore``, the scene as loaded before the first edit is
+        put back if an edit made the running one; else with ``remove_spawned`` every
+        spawned body still there is removed. ``done`` gets None when nothing was to change.
+        """
+        editor = self._editor
 
-    def remove_spawned(self, done):
-        """Remove every spawned body still there; ``done(outcome)``."""
-        spawned = set(self._editor.spawned)
+        def plan(scene):
+            if restore and editor.edited:
+                loaded = editor.loaded
+                return lambda scene: (loaded, [], '')
+            if remove_spawned and editor.edited and editor.spawned:   # not before a reload
+                return _without(set(editor.spawned))
+            return None
+        editor.submit_planned(plan, done)
 
-        def build(scene):
-            keep = [i for i, body in enumerate(scene.bodies) if body.name not in spawned]
-            new = scene
-            for index in reversed(range(len(scene.bodies))):
-                if index not in keep:
-                    new, _ = without_body(new, index)
-            return new, list(zip(keep, range(len(keep)))), ''
-        self._editor.submit(build, done)
+
+def _without(names):
+    """Return an edit's build that removes the bodies named ``names``."""
+    def build(scene):
+        keep = [i for i, body in enumerate(scene.bodies) if body.name not in names]
+        new, kept = scene, set(keep)
+        for index in reversed(range(len(scene.bodies))):
+            if index not in kept:
+                new, _ = without_body(new, index)
+        return new, list(zip(keep, range(len(keep)))), ''
+    return build

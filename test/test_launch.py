@@ -31,8 +31,8 @@ def test_launch_file_compiles_and_its_arguments_are_node_parameters_or_rviz(tmp_
     arguments, = [ast.literal_eval(node.value) for node in tree.body
                   if isinstance(node, ast.Assign) and node.targets[0].id == 'ARGUMENTS']
     assert set(arguments) == {'scene', 'integrator', 'rate', 'start_paused', 'params_file',
-                              'namespace', 'rviz'}
-    assert set(arguments) - {'rviz', 'params_file', 'namespace'} <= set(SPECS)
+                              'namespace', 'rviz', 'goal_body'}
+    assert set(arguments) - {'rviz', 'params_file', 'namespace', 'goal_body'} <= set(SPECS)
     assert SPECS['rate'].kind is float   # the launch file passes rate as a double
     assert SPECS['start_paused'].kind is bool   # and start_paused as a bool
 
@@ -103,8 +103,10 @@ def test_launch_arguments_reach_the_node_namespace_parameters_file_and_start_pau
         assert (node.paused, node.settings.step_ticks, node.settings.rate) == (True, 7, 200.0)
         published = {publisher.topic_name for publisher in node.publishers}
         remapped = {new for _, new in viewer.kwargs['remappings']}
-        cart = {'/sim1/rigid_sim/cart/goal_path', '/sim1/rigid_sim/cart/goal'}  # wrenches.yaml
-        assert cart <= remapped and remapped - cart <= published
+        # No scene argument: the default scene, whose first body is the handle.
+        goal = {'/sim1/rigid_sim/handle/goal_path', '/sim1/rigid_sim/handle/goal'}
+        assert goal <= remapped and remapped - goal <= published
+        assert '/sim1/rigid_sim/handle/goal' in node.goals.topics()
     finally:
         node.destroy_node()
 
@@ -112,7 +114,24 @@ def test_launch_arguments_reach_the_node_namespace_parameters_file_and_start_pau
 def test_empty_launch_arguments_leave_the_node_its_defaults(launch_file):
     simulator, viewer = launch_file.simulator(arguments())
     assert simulator.kwargs['namespace'] == '' and simulator.kwargs['parameters'] == [{}]
-    assert all(old == new for old, new in viewer.kwargs['remappings'])
+    moved = {old: new for old, new in viewer.kwargs['remappings'] if old != new}
+    assert moved == {'/rigid_sim/goal_body/goal': '/rigid_sim/handle/goal',
+                     '/rigid_sim/goal_body/goal_path': '/rigid_sim/handle/goal_path'}
+
+
+@pytest.mark.parametrize('given, body', [({'scene': 'springs.yaml'}, None),
+                                         ({'scene': 'wrenches.yaml'}, 'cart'),
+                                         ({'scene': 'wrenches.yaml', 'goal_body': 'puck'},
+                                          'puck')])
+def test_the_goal_tool_drives_a_body_of_the_launched_scene(launch_file, given, body):
+    """By default the scene's first body (read here from the file), or the one named."""
+    if body is None:
+        scene = yaml.safe_load((ROOT / 'config' / 'scenes' / given['scene']).read_text())
+        body = scene['bodies'][0]['name']
+    _, viewer = launch_file.simulator(arguments(**given))
+    remapped = dict(viewer.kwargs['remappings'])
+    assert remapped['/rigid_sim/goal_body/goal'] == f'/rigid_sim/{body}/goal'
+    assert remapped['/rigid_sim/goal_body/goal_path'] == f'/rigid_sim/{body}/goal_path'
 
 
 def test_a_start_paused_that_is_not_a_bool_is_refused_naming_it(launch_file):
@@ -135,9 +154,10 @@ def test_rviz_view_has_world_fixed_frame_and_the_three_displays():
 def test_every_topic_the_rviz_view_names_is_published_by_the_node(rigid_sim, launch_file):
     """Topics are read from every display and tool of the file; wrenches.yaml runs.
 
-    They are the ones the launch file remaps into a namespace. A body's goal path is
-    published from its first goal on, and its goal is subscribed to once a publisher (RViz's
-    goal tool) appears: both are the cart's.
+    They are the ones the launch file remaps into a namespace, goal_body to the body the
+    goal tool drives (wrenches.yaml's first, the cart). A body's goal path is published from
+    its first goal on, and its goal is subscribed to once a publisher (RViz's goal tool)
+    appears.
     """
     view = displays()
     topics = {item['Topic']['Value'] for item in view['Displays'] + view['Tools']
@@ -145,5 +165,8 @@ def test_every_topic_the_rviz_view_names_is_published_by_the_node(rigid_sim, lau
     assert topics == {f'/rigid_sim/{topic}' for topic in launch_file.VIEWED}
     node = rigid_sim(scene='wrenches.yaml').node
     published = {publisher.topic_name for publisher in node.publishers}
-    assert topics - {'/rigid_sim/cart/goal_path', '/rigid_sim/cart/goal'} <= published
-    assert '/rigid_sim/cart/goal' in node.goals.topics()
+    goal = {'/rigid_sim/goal_body/goal_path', '/rigid_sim/goal_body/goal'}
+    assert topics - goal <= published
+    _, viewer = launch_file.simulator(arguments(scene='wrenches.yaml'))
+    remapped = dict(viewer.kwargs['remappings'])
+    assert remapped['/rigid_sim/goal_body/goal'] in node.goals.topics()

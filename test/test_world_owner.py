@@ -1,0 +1,281 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Preparations that overlap: parameter changes, spawns, resets and reloads in every order.
+
+Each race is forced, never timed: a gate holds the worker inside the preparation (the
+integrator's compile, or a spawn's reading of its body) until the test has asked for the
+other change, and the test drives the node's executor itself. The answers are what the
+client was told; what must hold after is that what runs is what was asked for last, with
+nothing answered OK and then lost: the integrator steps the world it was built for, and a
+spawned body falls as a body under gravity g alone, ``g t^2 / 2`` from rest.
+"""
+import threading
+
+import numpy as np
+import pytest
+from rclpy.parameter import Parameter
+from simulation_interfaces.msg import Result
+from simulation_interfaces.srv import DeleteEntity, ResetSimulation, SpawnEntity
+
+import ros_tools
+from rigid_sim import conversions, node as node_module, spawning
+from rigid_sim.testing.delivery import wait_until
+
+G = 9.81
+DT = 0.01
+SCENE = f"""
+limits: {{max_bodies: 4}}
+effects: {{gravity: {{acceleration: [0.0, 0.0, -{G}]}}}}
+bodies:
+  - {{name: box, shape: {{type: box, size: [0.2, 0.2, 0.2]}}, mass: 1.0,
+     pose: {{position: [0.0, 0.0, 1.0]}}}}
+"""
+HEIGHT = 9.0   # m, where the ball is spawned, at rest
+BALL = ('{name: ball, shape: {type: sphere, radius: 0.1}, mass: 2.0, '
+        f'pose: {{position: [3.0, 0.0, {HEIGHT}]}}}}')
+OTHER = SCENE.replace('name: box', 'name: crate')
+WAIT = 600.0   # s of wall time a preparation may take at most (a compile on a loaded machine)
+
+
+class Gate:
+    """Holds the first worker that calls the wrapped function until :meth:`open`."""
+
+    def __init__(self):
+        self.entered, self._open = threading.Event(), threading.Event()
+
+    def wrap(self, function):
+        def gated(*args, **kwargs):
+            if not self.entered.is_set():
+                self.entered.set()
+                assert self._open.wait(WAIT), 'the test never opened the gate'
+            return function(*args, **kwargs)
+        return gated
+
+    def open(self):
+        self._open.set()
+
+
+@pytest.fixture
+def sim(rigid_sim):
+    return rigid_sim(yaml=SCENE, time_step=DT, start_paused=True)
+
+
+def spin_until(sim, condition, what):
+    assert wait_until(sim.executor, condition, WAIT), f'never: {what}'
+
+
+def ask_spawn(sim):
+    """Ask for the ball as ~/spawn_entity does; the list its answer is appended to."""
+    answers = []
+    answer = sim.node.sim_interfaces.spawns._on_spawn(
+        SpawnEntity.Request(resource_string=BALL), SpawnEntity.Response(), answers.append)
+    assert answer is spawning.deferred.LATER   # prepared off the executor, answered later
+    return answers
+
+
+def ask_reset(sim, scope):
+    answers = []
+    sim.node.sim_interfaces._on_reset(ResetSimulation.Request(scope=scope),
+                                      ResetSimulation.Response(), answers.append)
+    return answers
+
+
+def waits_its_turn(sim):
+    """Whether the node has queued a preparation behind the one running (it has an owner)."""
+    owner = getattr(sim.node, 'owner', None)
+    return owner is not None and owner.busy
+
+
+def finish(sim):
+    """Drive the executor until every preparation is swapped in or refused."""
+    node = sim.node
+    for _ in range(3):   # one may start another once it ends
+        assert node.reconfiguration.wait(WAIT) and node.sim_interfaces.editor.wait(WAIT)
+    sim.settle()
+
+
+def gate_prepare(sim):
+    gate, node = Gate(), sim.node
+    node.prepare = gate.wrap(node.prepare)   # the integrator's or the scene's preparation
+    return gate
+
+
+def gate_spawn(monkeypatch):
+    gate = Gate()
+    monkeypatch.setattr(spawning, 'body_from_text', gate.wrap(spawning.body_from_text))
+    return gate
+
+
+def assert_runs(sim, integrator, bodies):
+    """Assert the world has ``bodies``, stepped by an ``integrator`` built for it."""
+    world = sim.node.world
+    assert world.bodies.names == bodies
+    assert sim.node.settings.integrator == integrator == world.integrator.name
+    # An integrator built for another world indexes bodies that are not there.
+    assert world.integrator.bodies is world.bodies
+
+
+def assert_ball_falls(sim):
+    """From rest at HEIGHT under gravity alone: z = HEIGHT - g t^2 / 2 (exact for rk4)."""
+    index = sim.node.world.bodies.names.index('ball')
+    start = sim.node.world.time
+    ticks = 10
+    sim.step(ticks)
+    elapsed = sim.node.world.time - start
+    assert elapsed == pytest.approx(ticks * DT)
+    z = sim.node.world.y[index, 2]
+    assert z == pytest.approx(HEIGHT - 0.5 * G * elapsed ** 2, abs=1e-9)
+
+
+def test_a_spawn_during_an_integrator_compile_runs_the_new_integrator_on_the_new_world(
+        sim, monkeypatch):
+    """The compile ends after the spawn was asked: the integrator is made for the new world."""
+    gate = Gate()   # held in the compile, after the integrator was made for the world
+    monkeypatch.setattr(node_module, 'warm_up', gate.wrap(node_module.warm_up))
+    assert sim.node.set_parameters([Parameter('integrator', value='rk4')])[0].successful
+    assert gate.entered.wait(WAIT)          # compiling, held
+    answers = ask_spawn(sim)
+    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert_runs(sim, 'rk4', ('box', 'ball'))
+    sim.resume()
+    assert_ball_falls(sim)
+
+
+def test_parameters_set_during_a_spawn_are_what_runs_after_it(sim, monkeypatch):
+    """Integrator and error control changed while the spawn reads its body: neither is lost."""
+    gate = gate_spawn(monkeypatch)
+    answers = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)          # the spawn's worker is inside, held
+    node = sim.node
+    assert all(result.successful for result in node.set_parameters(
+        [Parameter('integrator', value='rk4'), Parameter('error_control', value=False)]))
+    # The integrator is swapped into the running world first, or waits for the spawn.
+    spin_until(sim, lambda: node.world.integrator.name == 'rk4' or waits_its_turn(sim),
+               'the integrator swapped in or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert_runs(sim, 'rk4', ('box', 'ball'))
+    assert node.world.control.error_control is False
+    sim.resume()
+    assert_ball_falls(sim)
+
+
+def test_removing_spawned_bodies_while_a_spawn_is_pending_removes_that_one_too(
+        sim, monkeypatch):
+    gate = gate_spawn(monkeypatch)
+    spawned = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)
+    reset = ask_reset(sim, ResetSimulation.Request.SCOPE_SPAWNED)
+    sim.settle()
+    gate.open()
+    finish(sim)
+    assert spawned[0].result.result == Result.RESULT_OK
+    assert reset[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('box',)   # the reset came after the spawn
+
+
+def test_a_spawn_asked_during_a_scene_reload_is_made_in_the_reloaded_scene(sim, tmp_path):
+    """Answered OK means the body is there: it is not lost to the reload asked before it."""
+    other = tmp_path / 'other.yaml'
+    other.write_text(OTHER)
+    gate = gate_prepare(sim)
+    assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
+    assert gate.entered.wait(WAIT)          # loading, held
+    answers = ask_spawn(sim)
+    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+    sim.resume()
+    assert_ball_falls(sim)
+
+
+def test_a_stale_preparation_is_begun_again_from_what_runs(sim, monkeypatch):
+    """A setting applied to the running world while a spawn is built stales the spawn."""
+    gate = gate_spawn(monkeypatch)
+    answers = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)
+    generation = sim.node.owner.generation
+    assert sim.node.set_parameters([Parameter('error_control', value=False)])[0].successful
+    assert sim.node.owner.generation == generation + 1
+    gate.open()
+    finish(sim)
+    assert sim.node.owner.redone == 1 and sim.node.owner.generation == generation + 2
+    assert answers[0].result.result == Result.RESULT_OK
+    assert sim.node.world.control.error_control is False
+
+
+def test_a_scene_edit_builds_the_output_messages_off_the_executor(sim, monkeypatch):
+    """The swap between two ticks makes no per-body message: that is O(bodies) work."""
+    made_on = []
+    build = conversions.StateMessages
+
+    def recorded(*args, **kwargs):
+        made_on.append(threading.current_thread())
+        return build(*args, **kwargs)
+    monkeypatch.setattr(conversions, 'StateMessages', recorded)
+    answers = ask_spawn(sim)
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert made_on and threading.main_thread() not in made_on
+
+
+def test_refused_input_counts_outlive_scene_edits(sim):
+    probe = ros_tools.Probe(sim, 'box')
+    probe.push('box', 'nowhere', force=(1.0, 0.0, 0.0))   # an unknown frame: refused
+    sim.step(1)
+    assert probe.diagnostics.values()['refused inputs box'] == '1'
+    answers = ask_spawn(sim)
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    values = probe.diagnostics.values()
+    assert values['refused inputs box'] == '1' and values['refused inputs'] == '1'
+
+
+def test_diagnostics_say_paused_while_paused(sim):
+    probe = ros_tools.Probe(sim)
+    sim.step(1)
+    assert probe.diagnostics.now().message == 'paused'
+    sim.resume()
+    sim.step(1)
+    assert probe.diagnostics.now().message == 'running'
+    assert np.isfinite(sim.node.world.y).all()
+
+
+def test_a_reload_forgets_the_spawned_bodies_for_resets(sim, tmp_path):
+    """After a reload the scene's own body of a spawned body's name is not 'spawned'."""
+    answers = ask_spawn(sim)
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    with_ball = tmp_path / 'with_ball.yaml'
+    with_ball.write_text(OTHER + '  - ' + BALL + '\n')
+    assert sim.set_parameters(scene=str(with_ball))[0].successful
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+    reset = ask_reset(sim, ResetSimulation.Request.SCOPE_SPAWNED)
+    finish(sim)
+    assert reset[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+
+
+def test_deleting_a_body_whose_spawn_is_pending_deletes_it_after_the_spawn(sim, monkeypatch):
+    gate = gate_spawn(monkeypatch)
+    spawned = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)
+    deleted = []
+    at_once = sim.node.sim_interfaces.spawns._on_delete(
+        DeleteEntity.Request(entity='ball'), DeleteEntity.Response(), deleted.append)
+    assert at_once is spawning.deferred.LATER, 'answered before the spawn it follows'
+    sim.settle()
+    gate.open()
+    finish(sim)
+    assert spawned[0].result.result == Result.RESULT_OK
+    assert deleted[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('box',)
+    missing = sim.node.sim_interfaces.spawns._on_delete(   # nothing pending: answered now
+        DeleteEntity.Request(entity='ball'), DeleteEntity.Response(), None)
+    assert missing.result.result == Result.RESULT_NOT_FOUND
