@@ -243,7 +243,7 @@ def _check_text(name, value):
 
 
 def _directories(name, value):
-    """A list of directory paths as a tuple, or ParameterError."""
+    """Return a list of directory paths as a tuple, or raise ParameterError."""
     if isinstance(value, str) or not isinstance(value, (list, tuple)) \
             or not all(isinstance(item, str) for item in value):
         raise ParameterError(f'parameter {name!r}: expected a list of directory paths '

@@ -151,8 +151,9 @@ class SceneEditor:
 
 
 def scene_path(uri, resource_paths):
-    """Return the file a SpawnEntity ``uri`` names: a path, a file://, package:// or model://
-    URI, or a packaged scene.
+    """Return the file a SpawnEntity ``uri`` names: a path, a URI or a packaged scene.
+
+    The URI is ``file://``, ``package://`` or ``model://``.
 
     Only files in the allowed directories (:func:`rigid_sim.resources.allowed_roots` of
     ``resource_paths``) are found; any other is refused unopened, as a missing one is. A
@@ -180,10 +181,11 @@ def scene_path(uri, resource_paths):
 
 
 def entity_name(own, name, renaming, taken):
-    """The spawned body's name: ``name`` (the request's), else ``own`` (the resource's).
+    """Return the spawned body's name: ``name`` (the request's), else ``own``.
 
-    Neither given: GENERATED_NAME with ``renaming``, else NAME_INVALID, as SpawnEntity.srv
-    says. With ``renaming`` a name in ``taken`` becomes ``<name>_1``, ``<name>_2``, ...
+    ``own`` is the resource's. Neither given: GENERATED_NAME with ``renaming``, else
+    NAME_INVALID, as SpawnEntity.srv says. With ``renaming`` a name in ``taken`` becomes
+    ``<name>_1``, ``<name>_2``, ...
     """
     chosen = name or own
     if not chosen:

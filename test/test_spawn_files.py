@@ -90,7 +90,7 @@ TWO_LINKS = URDF.replace('</robot>', '<link name="second"/></robot>')
 
 @pytest.fixture(scope='module')
 def world(tmp_path_factory):
-    """The node in its folder, with a folder outside holding files it must not read."""
+    """Start the node in its folder, with a folder outside holding files it must not read."""
     folder = tmp_path_factory.mktemp('allowed')
     outside = tmp_path_factory.mktemp('outside')
     (folder / 'scene.yaml').write_text(SCENE)
@@ -109,7 +109,7 @@ def world(tmp_path_factory):
 
 @pytest.fixture
 def sim(world):
-    """The simulation stopped: the scene as loaded, paused, at time 0."""
+    """Stop the simulation: the scene as loaded, paused, at time 0."""
     state = SimulationState(state=SimulationState.STATE_STOPPED)
     world.call('set_simulation_state', state=state)
     assert world.call('reset_simulation').result.result == OK

@@ -81,7 +81,7 @@ def _unserved(what):
 
 
 def parse_xml(text):
-    """The root element of the XML ``text``, read with no DTD, entities or network."""
+    """Return the root element of the XML ``text``, read with no DTD, entities or network."""
     from lxml import etree
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
                              huge_tree=False, remove_comments=True, remove_pis=True)
@@ -98,7 +98,7 @@ def parse_xml(text):
 
 
 def model_body(text, spawn_format_name, resolve):
-    """The body entry and centre of mass of the one-link model ``text``.
+    """Return the body entry and centre of mass of the one-link model ``text``.
 
     Parameters
     ----------
@@ -159,7 +159,7 @@ def _links_refusal(what, name, count):
 
 
 def _one_geometry(collisions, visuals, where, shape_of, resolve):
-    """The shape of the one collision (else visual) geometry of a link."""
+    """Return the shape of the one collision (else visual) geometry of a link."""
     elements = collisions or visuals
     kind = 'collision' if collisions else 'visual'
     if len(elements) != 1:
@@ -197,7 +197,7 @@ def _offset_refusal(where):
 
 
 def _turned(rotation, inertia):
-    """The inertia tensor given in axes ``rotation`` turned into the link's axes."""
+    """Turn the inertia tensor given in axes ``rotation`` into the link's axes."""
     return (rotation @ np.asarray(inertia, float) @ rotation.T).tolist()
 
 
@@ -248,7 +248,7 @@ def _text(element, tag):
 
 
 def _numbers(element, count, where):
-    """The ``count`` numbers an element holds, or a refusal naming the element."""
+    """Return the ``count`` numbers an element holds, or refuse naming the element."""
     try:
         values = [float(item) for item in (element.text or '').split()]
     except ValueError:
@@ -265,7 +265,7 @@ def _number(element, where):
 
 
 def _pose(element, where):
-    """The 4x4 transform of an element's ``<pose>`` (x y z roll pitch yaw), identity without."""
+    """Return the 4x4 transform of an element's ``<pose>`` (x y z roll pitch yaw), or eye(4)."""
     pose = element.find('pose')
     if pose is None:
         return np.eye(4)
@@ -375,7 +375,7 @@ def resource_candidates(uri, base_dir, roots, package_share=None):
 
 
 def find_resource(uri, base_dir, roots, what, package_share=None):
-    """The real path of the first of :func:`resource_candidates` in an allowed directory.
+    """Return the real path of the first of :func:`resource_candidates` allowed.
 
     Raises DescriptionRefused('missing_asset') with the same words whether nothing exists
     there or it lies outside the allowed directories.

@@ -71,7 +71,7 @@ def body_from_text(text, scene, name=None, max_bytes=MAX_SCENE_BYTES, base_dir='
 
 
 def entry_from_text(text, max_bytes=MAX_SCENE_BYTES, where='resource_string'):
-    """The body entry (a mapping) the YAML ``text`` holds, unchecked; or SpawnRefused."""
+    """Return the body entry (a mapping) the YAML ``text`` holds, unchecked; or SpawnRefused."""
     try:
         entry = parse_yaml(text, max_bytes)
     except FileRefused as refused:
@@ -83,7 +83,7 @@ def entry_from_text(text, max_bytes=MAX_SCENE_BYTES, where='resource_string'):
 
 
 def entry_from_model(text, spawn_format, resolve, where='resource_string'):
-    """The body entry and centre of mass of a one-link URDF or SDFormat model, or SpawnRefused.
+    """Return the body entry and centre of mass of a one-link URDF or SDFormat model.
 
     See :func:`rigid_sim.core.robot_description.model_body`.
     """
@@ -95,7 +95,7 @@ def entry_from_model(text, spawn_format, resolve, where='resource_string'):
 
 def checked_body(entry, scene, base_dir='.', roots=None, center_of_mass=None,
                  where='resource_string'):
-    """The :class:`BodySpec` of a body ``entry``, checked as an item of ``bodies:`` would be.
+    """Return the :class:`BodySpec` of ``entry``, checked as an item of ``bodies:`` would be.
 
     Within ``scene``'s limits; a mesh file is relative to ``base_dir`` and in one of
     ``roots`` (None: anywhere). ``center_of_mass`` ((3,) m, body frame), when given,

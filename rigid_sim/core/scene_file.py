@@ -89,7 +89,7 @@ def confined(path, roots, what):
 
 
 def not_found(what, roots):
-    """The one refusal of a file outside ``roots`` or missing there: it says which."""
+    """Return the one refusal of a file outside ``roots`` or missing there: it tells neither."""
     return f'{what} not found in the allowed resource directories {clipped(list(roots), 400)}'
 
 
@@ -296,10 +296,10 @@ def parse_yaml(text, max_bytes=MAX_SCENE_BYTES):
 
 
 def syntax_only(problem):
-    """A YAML parser's ``problem`` without the text of the file it quotes.
+    """Return a YAML parser's ``problem`` without the text of the file it quotes.
 
-    PyYAML quotes what it found (``found character '\\t'``, ``found undefined alias
-    'x'``, a tag); the syntax it expected (``expected ',' or '}'``) stays.
+    PyYAML quotes what it found (a character, an undefined alias, a tag), each replaced by
+    ``(...)``; the syntax it expected (``expected ',' or '}'``) stays.
     """
     def keep_syntax(match):
         return match.group(0) if YAML_SYNTAX.fullmatch(match.group(0)) else '(...)'
