@@ -265,7 +265,7 @@ def test_meshes_are_read_from_the_allowed_directories_only(sim):
 
 
 def test_resource_paths_is_the_operators_and_no_client_widens_it(sim):
-    """Read at start only: a client setting it is refused, the default stays."""
+    """Read at start only: a client setting it is refused, the default stays; no file sets it."""
     client = sim.node.create_client(GetParameters, f'{sim.prefix}/get_parameters')
     assert client.wait_for_service(timeout_sec=TIMEOUT)
     future = client.call_async(GetParameters.Request(names=['resource_paths']))
@@ -274,6 +274,11 @@ def test_resource_paths_is_the_operators_and_no_client_widens_it(sim):
     assert list(value.string_array_value) == ['.', str(sim.folder)]
     assert not set_parameter(sim, 'resource_paths', ['/'])[0]
     assert spawn(sim, 'x', uri='/etc/passwd')[0] == CODES.MISSING_ASSETS
+    (sim.folder / 'widening.yaml').write_text(
+        f"limits: {{resource_paths: ['/']}}\nbodies:\n  - {{name: m, mass: 1.0, shape: "
+        f"{{type: mesh, file: {sim.outside / 'cube.obj'}}}}}\n")
+    code, message, _ = spawn(sim, uri='widening.yaml')   # a file never lifts its own limits
+    assert code == CODES.RESOURCE_PARSE_ERROR and 'limits.resource_paths' in message
 
 
 def test_spawn_formats_are_what_spawn_entity_reads(sim):
