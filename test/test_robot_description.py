@@ -51,16 +51,16 @@ def test_an_sdf_link_is_placed_by_the_model_and_link_poses():
                                atol=1e-15)
     np.testing.assert_allclose(entry['inertia']['matrix'], np.diag([1.0, 3.0, 2.0]),
                                atol=1e-15)
-    assert com.tolist() == [0.0, 0.0, 0.0] and entry['shape'] == {'type': 'sphere',
-                                                                   'radius': 0.5}
+    assert com.tolist() == [0.0, 0.0, 0.0]
+    assert entry['shape'] == {'type': 'sphere', 'radius': 0.5}
 
 
 @pytest.mark.parametrize('text, name, expected', [
     ('{name: a}', '', 'rigid_sim_yaml'), ('<robot name="r"/>', '', 'urdf'),
     ('<sdf version="1.9"/>', '', 'sdf'), ('', 'a.URDF', 'urdf'), ('x', 'b.sdf', 'sdf'),
     ('<robot/>', 'c.yaml', 'rigid_sim_yaml')])
-def test_the_format_is_told_by_the_file_ending_else_by_the_root_element(text, name,
-                                                                          expected):
+def test_the_format_is_told_by_the_file_ending_else_by_the_root_element(
+        text, name, expected):
     assert spawn_format(text, name) == expected
 
 
