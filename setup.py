@@ -49,7 +49,9 @@ setup(
     ] + tree_files('config') + tree_files('interfaces'),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
-    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
+    # yourdfpy reads URDF for SpawnEntity, lxml (its parser) SDFormat.
+    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree',
+                      'yourdfpy', 'lxml'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the

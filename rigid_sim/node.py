@@ -28,7 +28,7 @@ from rigid_sim.inputs import WARNING_PERIOD, BodyInputs
 from rigid_sim.outputs import LISTENER_REFRESH, StateOutputs
 from rigid_sim.qos_overrides import QosOverrides
 from rigid_sim.reconfiguration import Reconfiguration
-from rigid_sim.resources import find_scene
+from rigid_sim.resources import allowed_roots, find_scene
 from rigid_sim.tick_loop import TickLoop
 from rigid_sim.world_owner import WorldOwner
 
@@ -42,7 +42,8 @@ def load(settings):
     Raises SceneError, FileNotFoundError, or ParameterError when ``world_frame`` is a frame of
     the scene.
     """
-    scene = load_scene(find_scene(settings.scene), **settings.resource_limits)
+    scene = load_scene(find_scene(settings.scene, settings.resource_paths),
+                       allowed_roots(settings.resource_paths), **settings.resource_limits)
     check_frames(scene, settings)
     return scene, build_world(scene, settings.integrator, settings.tolerance,
                               settings.error_control)

@@ -8,6 +8,7 @@ parameter declared as double. The type and range are then checked here, for star
 runtime values alike (at runtime rclpy checks the range of a double first, in its own words).
 """
 import math
+import os
 import re
 from dataclasses import dataclass, replace
 
@@ -16,7 +17,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR, REGISTRY
 from rigid_sim.core.scene_limits import RESOURCE_LIMITS
 from rigid_sim.core.text import shown
-from rigid_sim.resources import DEFAULT_SCENE
+from rigid_sim.resources import DEFAULT_RESOURCE_PATHS, DEFAULT_SCENE
 
 MAX_RATE = 1000.0  # Hz; a 1 kHz timer alone already jitters by 5 % (docs/ros_notes.md)
 # Hz; one tick at least every 1000 s keeps the timer period and the diagnostics meaningful.
@@ -34,6 +35,7 @@ MIN_TOLERANCE = 1e-12
 # scene larger than this makes its per-body topics only when someone uses them.
 PER_BODY_TOPICS_LIMIT = 100
 MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
+MAX_RESOURCE_PATHS = 64  # directories in resource_paths; each is searched for a relative name
 # A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
 FRAME_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
 # A frame prefix: the same name tokens, each followed by '/' (the last '/' may be left out:
@@ -59,6 +61,8 @@ class Settings:
     """Validated parameter values, as the node uses them."""
 
     scene: str             # a path; a bare name: working dir, then config/, config/scenes/
+    # Directories files may be read from besides the packaged config/ (read at start only).
+    resource_paths: tuple
     rate: float            # Hz of wall time, ticks per second
     time_step: float       # s of simulated time advanced per tick
     substeps: int          # integrator steps per tick
@@ -106,7 +110,7 @@ class Settings:
 class Spec:
     """How one parameter is declared and checked."""
 
-    kind: type         # float, int, str or bool
+    kind: type         # float, int, str, bool or tuple (of str: a string array)
     description: str
     low: float = None  # inclusive bounds of a numeric parameter
     high: float = None
@@ -119,6 +123,11 @@ class Spec:
 SPECS = {
     'scene': Spec(str, 'scene YAML file; a bare name is looked up in the working directory, '
                        'then in share/rigid_sim/config and its scenes/'),
+    'resource_paths': Spec(tuple, 'directories whose files (scenes, SpawnEntity uris, meshes) '
+                                  'may be read, besides the packaged config/ (default: the '
+                                  'working directory and the directory of the scene given at '
+                                  'start); any other file is refused unopened; read at start '
+                                  'only'),
     'rate': Spec(float, 'ticks per second of wall time, Hz; 0: no wall clock, tick as fast '
                         'as the CPU allows', 0.0, MAX_RATE),
     'time_step': Spec(float, 'simulated seconds per tick (default 1/rate at start, '
@@ -172,9 +181,11 @@ def descriptor(name):
     """Return the ParameterDescriptor of parameter ``name``: description, type note and range."""
     spec = SPECS[name]
     numeric = ' (integer literals accepted)' if spec.kind is float else ''
+    kind = 'string array' if spec.kind is tuple else spec.kind.__name__
     result = ParameterDescriptor(
         name=name, description=spec.description, dynamic_typing=True,
-        additional_constraints=f'type {spec.kind.__name__}{numeric}')
+        read_only=spec.kind is tuple,
+        additional_constraints=f'type {kind}{numeric}')
     if spec.kind is float:
         result.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
                                                           to_value=float(spec.high))]
@@ -192,6 +203,8 @@ def coerce(name, value):
         raise ParameterError(f'parameter {name!r}: expected a number, got {shown(value)}')
     if spec.kind is int and not isinstance(value, int):
         raise ParameterError(f'parameter {name!r}: expected an integer, got {shown(value)}')
+    if spec.kind is tuple:
+        return _directories(name, value)
     if spec.kind in (str, bool) and not isinstance(value, spec.kind):
         raise ParameterError(
             f'parameter {name!r}: expected a {spec.kind.__name__}, got {shown(value)}')
@@ -229,6 +242,22 @@ def _check_text(name, value):
                              f'{MAX_PATH} characters, no NUL)')
 
 
+def _directories(name, value):
+    """Return a list of directory paths as a tuple, or raise ParameterError."""
+    if isinstance(value, str) or not isinstance(value, (list, tuple)) \
+            or not all(isinstance(item, str) for item in value):
+        raise ParameterError(f'parameter {name!r}: expected a list of directory paths '
+                             f'(strings), got {shown(value)}')
+    if len(value) > MAX_RESOURCE_PATHS:
+        raise ParameterError(f'parameter {name!r}: {len(value)} directories, more than '
+                             f'{MAX_RESOURCE_PATHS}')
+    for item in value:
+        if not item.strip() or len(item) > MAX_PATH or '\0' in item:
+            raise ParameterError(f'parameter {name!r}: {shown(item)} is no directory path '
+                                 f'(not empty, at most {MAX_PATH} characters, no NUL)')
+    return tuple(value)
+
+
 def _check_integrator(name):
     if name not in REGISTRY:
         raise ParameterError(
@@ -258,7 +287,11 @@ def declare(node):
                 'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS,
                 'goal_horizon': 2.0}
     for name in SPECS:
-        if name == 'time_step':
+        if name == 'resource_paths':   # the operator chose the start scene's directory
+            start_folder = os.path.dirname(values['scene'])
+            defaults[name] = list(DEFAULT_RESOURCE_PATHS) + ([start_folder] if start_folder
+                                                             else [])
+        elif name == 'time_step':
             defaults[name] = 1.0 / (values['rate'] or UNTIMED_DEFAULT_RATE)
         elif name == 'publish_rate':
             defaults[name] = values['rate'] or UNTIMED_DEFAULT_RATE
@@ -266,7 +299,8 @@ def declare(node):
         # as at runtime; the declared value is the coerced one (50.0 for -p rate:=50).
         override = node._parameter_overrides.get(name)
         values[name] = coerce(name, defaults[name] if override is None else override.value)
-        node.declare_parameter(name, values[name], descriptor(name), ignore_override=True)
+        declared = list(values[name]) if SPECS[name].kind is tuple else values[name]
+        node.declare_parameter(name, declared, descriptor(name), ignore_override=True)
     _check_integrator(values['integrator'])
     return Settings(**values)
 
@@ -290,6 +324,9 @@ def updated(settings, changes):
     """
     values = {change.name: coerce(change.name, change.value)
               for change in changes if change.name in SPECS}
+    if values.get('resource_paths', settings.resource_paths) != settings.resource_paths:
+        raise ParameterError("parameter 'resource_paths': read at start only; a client may "
+                             'not widen what files the node reads')
     if values.get('start_paused', settings.start_paused) != settings.start_paused:
         raise ParameterError("parameter 'start_paused': read at start only; call ~/pause to "
                              'pause or resume the running node')

@@ -58,7 +58,7 @@ class Reconfiguration:
             proposed = parameters.updated(self.accepted, changes)
             names = {change.name for change in changes}
             if 'scene' in names and not self._reverting:
-                find_scene(proposed.scene)   # a missing file is refused at once
+                find_scene(proposed.scene, proposed.resource_paths)   # refused at once
             elif 'world_frame' in names:
                 self._node.check_frames(proposed)
         except (ValueError, OSError) as error:

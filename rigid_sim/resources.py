@@ -10,15 +10,24 @@ depends on how the package was installed:
   ``lib/python3.X/site-packages`` that holds this module;
 - the source tree (``pip install -e .`` installs no data files, and a plain venv has no
   ``AMENT_PREFIX_PATH``): ``config/`` beside the ``rigid_sim`` package directory.
+
+Files a client names (the ``scene`` parameter, SpawnEntity's ``uri``, the meshes they use)
+are read only from the allowed directories: the packaged ``config/`` and the operator's
+``resource_paths`` (:func:`allowed_roots`); anything else is refused unopened, with the
+answer a missing file gets.
 """
 import os
 import sys
 from pathlib import Path
 
-from rigid_sim.core.text import clipped, shown
+from rigid_sim.core.scene_file import confined, FileRefused
+from rigid_sim.core.text import shown
 
 PACKAGE = 'rigid_sim'
 DEFAULT_SCENE = 'default.yaml'
+# The operator's directories when none are given: the working directory (the packaged
+# config/ is allowed always).
+DEFAULT_RESOURCE_PATHS = ('.',)
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
@@ -32,6 +41,22 @@ def _ament_share():
     try:
         return Path(get_package_share_directory(PACKAGE))
     except (PackageNotFoundError, OSError):  # OSError: no AMENT_PREFIX_PATH (plain venv)
+        return None
+
+
+def package_share(name):
+    """Return the share directory of ROS package ``name`` by the ament index, or None.
+
+    For ``package://`` URIs; what is read there must still lie in an allowed directory.
+    """
+    try:
+        from ament_index_python.packages import (PackageNotFoundError,
+                                                 get_package_share_directory)
+    except ImportError:
+        return None
+    try:
+        return get_package_share_directory(name)
+    except (PackageNotFoundError, OSError, ValueError):
         return None
 
 
@@ -70,38 +95,59 @@ def packaged_directories(folder):
     return found
 
 
-def find_scene(name):
-    """Path of the scene file ``name``.
+def allowed_roots(resource_paths=DEFAULT_RESOURCE_PATHS):
+    """Real paths of the directories files may be read from: packaged config, then the operator's.
 
-    An absolute path, or a path relative to the working directory, is taken as it is, as
-    soon as something exists there (a FIFO or directory is then refused by the loader as
-    not a regular file, not reported missing); a bare file name not found there is looked
-    up in the packaged ``config`` (README), then in ``config/scenes``, where the shipped
-    scenes are.
+    Parameters
+    ----------
+    resource_paths : sequence of str
+        The operator's directories (parameter ``resource_paths``); relative ones start at
+        the working directory. Symbolic links are resolved, so a root is compared as the
+        files in it will be.
+
+    Returns
+    -------
+    list of str
+    """
+    roots = [os.path.realpath(folder) for folder in config_directories()]
+    for folder in resource_paths:
+        real = os.path.realpath(os.path.expanduser(folder))
+        if real not in roots:
+            roots.append(real)
+    return roots
+
+
+def find_scene(name, resource_paths=DEFAULT_RESOURCE_PATHS):
+    """Real path of the scene file ``name``, in the allowed directories only.
+
+    An absolute path is taken as it is; a relative one is looked up in each of the
+    operator's ``resource_paths`` (the working directory by default), then in the
+    packaged ``config`` (README) and ``config/scenes``, where the shipped scenes are. The
+    first place where something exists and that lies in an allowed directory (symbolic
+    links and ``..`` resolved) is the answer: a FIFO or directory is then refused by the
+    loader as not a regular file. A path outside the allowed directories is never opened.
 
     Raises
     ------
     FileNotFoundError
-        Naming every place that was searched, or why the name is no path at all.
+        The same words whether the file does not exist or lies outside the allowed
+        directories (or the name is no path at all).
     """
-    try:
-        return _find(name)
-    except (OSError, ValueError) as error:  # an embedded NUL, a name too long, ...
-        if isinstance(error, FileNotFoundError):
-            raise
-        raise FileNotFoundError(f'scene file {shown(name)}: {clipped(error)}') from None
-
-
-def _find(name):
-    path = Path(name).expanduser()
-    if os.path.lexists(path):
-        return path.resolve()
-    searched = [clipped(path.resolve())]
-    if not path.is_absolute() and len(path.parts) == 1:
-        for folder in (folder for config in config_directories()
-                       for folder in (config, config / 'scenes')):
-            packaged = folder / path
-            if packaged.is_file():
-                return packaged
-            searched.append(clipped(packaged))
-    raise FileNotFoundError(f'scene file {shown(name)} not found; searched {searched}')
+    roots = allowed_roots(resource_paths)
+    path = Path(name).expanduser() if '\0' not in name else None
+    if path is not None and path.is_absolute():
+        candidates = [path]
+    elif path is not None:
+        packaged = [Path(folder) for config in config_directories()
+                    for folder in (config, config / 'scenes')]
+        operator = [Path(folder).expanduser() for folder in resource_paths]
+        candidates = [folder / path for folder in operator + packaged]
+    else:
+        candidates = []
+    for candidate in candidates:
+        try:
+            return Path(confined(candidate, roots, 'scene file'))
+        except FileRefused:
+            continue
+    raise FileNotFoundError(f'scene file {shown(name)} not found in the allowed resource '
+                            f'directories {shown(roots, 400)} (parameter resource_paths)')

@@ -14,6 +14,7 @@ from simulation_interfaces import msg as si_msg, srv as si_srv
 from simulation_interfaces.action import SimulateSteps
 
 from rigid_sim import deferred
+from rigid_sim.core.robot_description import SPAWN_FORMATS
 from rigid_sim.entity_services import EntityServices, result
 from rigid_sim.spawning import SceneEditor, SpawnServices
 
@@ -26,7 +27,7 @@ MAX_STEPS = 10_000_000
 def features():
     """Return the SimulatorFeatures this node supports, honestly: none it would refuse."""
     f = si_msg.SimulatorFeatures
-    message = si_msg.SimulatorFeatures(spawn_formats=['rigid_sim_yaml'])
+    message = si_msg.SimulatorFeatures(spawn_formats=list(SPAWN_FORMATS))
     message.features = [
         f.SPAWNING, f.DELETING, f.SPAWNING_RESOURCE_STRING, f.ENTITY_STATE_GETTING,
         f.ENTITY_STATE_SETTING, f.SIMULATION_RESET, f.SIMULATION_RESET_TIME,

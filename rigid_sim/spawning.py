@@ -15,6 +15,7 @@ with the reason.
 """
 from dataclasses import replace
 import itertools
+import os
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
@@ -24,20 +25,25 @@ from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
 from rigid_sim.core.imu import scene_imus
 from rigid_sim.core.scene import build_world
+from rigid_sim.core.robot_description import (
+    DescriptionRefused, find_resource, spawn_format)
 from rigid_sim.core.scene_edit import (
-    bodies_from_file, body_from_text, check_name, placed, SpawnRefused,
-    with_bodies, without_body)
+    bodies_from_file, check_name, checked_body, entry_from_model, entry_from_text, placed,
+    SpawnRefused, with_bodies, without_body)
+from rigid_sim.core.scene_file import FileRefused, read_text
 from rigid_sim.core.text import shown
 from rigid_sim.entity_services import reference_frame, result
-from rigid_sim.resources import find_scene
+from rigid_sim.resources import allowed_roots, find_scene, package_share
 from rigid_sim.world_owner import Job
 
 from simulation_interfaces import msg as si_msg, srv as si_srv
 
 # SpawnEntity's codes for the kinds of SpawnRefused.
 SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',
-               'parse': 'RESOURCE_PARSE_ERROR', 'missing_asset': 'MISSING_ASSETS',
-               'pose': 'INVALID_POSE', 'no_resource': 'NO_RESOURCE'}
+               'parse': 'RESOURCE_PARSE_ERROR', 'unsupported': 'UNSUPPORTED_FORMAT',
+               'missing_asset': 'MISSING_ASSETS', 'pose': 'INVALID_POSE',
+               'no_resource': 'NO_RESOURCE'}
+GENERATED_NAME = 'body'   # what an unnamed spawn with allow_renaming is called, then _1, ...
 
 
 def outcome(preparation):
@@ -120,17 +126,51 @@ class SceneEditor:
         return self._node.owner.wait(timeout)
 
 
-def scene_path(uri):
-    """Return the file a SpawnEntity ``uri`` names: a path, file:// URI or packaged scene."""
+def scene_path(uri, resource_paths):
+    """Return the file a SpawnEntity ``uri`` names: a path, a URI or a packaged scene.
+
+    The URI is ``file://``, ``package://`` or ``model://``.
+
+    Only files in the allowed directories (:func:`rigid_sim.resources.allowed_roots` of
+    ``resource_paths``) are found; any other is refused unopened, as a missing one is. A
+    ``model://`` URI naming a model's folder means its ``model.sdf``.
+    """
     parsed = urlparse(uri)
+    if parsed.scheme in ('package', 'model'):
+        roots = allowed_roots(resource_paths)
+        try:
+            path = find_resource(uri, '.', roots, 'uri file', package_share)
+            if os.path.isdir(path):
+                path = find_resource('model.sdf', path, roots, 'uri file')
+        except DescriptionRefused as refused:
+            raise SpawnRefused(refused.kind, f'uri {shown(uri)}: {refused}') from None
+        return Path(path)
     if parsed.scheme == 'file':
-        return Path(unquote(parsed.path))
-    if parsed.scheme and len(parsed.scheme) > 1:   # not a Windows drive letter
-        raise SpawnRefused('parse', f'uri {shown(uri)}: only file paths and file:// URIs')
+        uri = unquote(parsed.path)
+    elif parsed.scheme and len(parsed.scheme) > 1:   # not a Windows drive letter
+        raise SpawnRefused('unsupported', f'uri {shown(uri)}: a path or a file://, package:// '
+                                          'or model:// URI')
     try:
-        return find_scene(uri)
+        return find_scene(uri, resource_paths)
     except FileNotFoundError as error:
         raise SpawnRefused('missing_asset', str(error)) from None
+
+
+def entity_name(own, name, renaming, taken):
+    """Return the spawned body's name: ``name`` (the request's), else ``own``.
+
+    ``own`` is the resource's. Neither given: GENERATED_NAME with ``renaming``, else
+    NAME_INVALID, as SpawnEntity.srv says. With ``renaming`` a name in ``taken`` becomes
+    ``<name>_1``, ``<name>_2``, ...
+    """
+    chosen = name or own
+    if not chosen:
+        if not renaming:
+            raise SpawnRefused('name_invalid', 'no name: give name (or one in the resource), '
+                                               'or allow_renaming for a generated one')
+        chosen = GENERATED_NAME
+    chosen = check_name(chosen)
+    return free_name(chosen, taken) if renaming else chosen
 
 
 def free_name(name, taken):
@@ -176,32 +216,63 @@ class SpawnServices:
         name = check_name(request.name) if request.name else None
         origin, orientation, default = self._placement(request)
         uri, text, renaming = request.uri, request.resource_string, request.allow_renaming
-        limits = self._node.settings.resource_limits   # the operator's, as for the scene
+        settings = self._node.settings
+        limits = settings.resource_limits   # the operator's, as for the scene
+        paths, roots = settings.resource_paths, allowed_roots(settings.resource_paths)
+
+        def resolver(base_dir):
+            return lambda mesh: find_resource(mesh, base_dir, roots, 'mesh', package_share)
+
+        def body(entry, scene, base_dir, center_of_mass, where):
+            taken = {body.name for body in scene.bodies}
+            entry = {**entry, 'name': entity_name(entry.get('name'), name, renaming, taken)}
+            return checked_body(entry, scene, base_dir, roots, center_of_mass, where)
+
+        def from_uri(scene):
+            path = scene_path(uri, paths)
+            try:
+                model = read_text(path, limits['max_scene_bytes'], 'uri file')
+                kind = spawn_format(model, path.name)
+            except FileRefused as refused:
+                raise SpawnRefused('parse', f'uri: {refused.where}: {refused.reason}') from None
+            except DescriptionRefused as refused:
+                raise SpawnRefused(refused.kind, f'uri: {refused}') from None
+            if kind != 'rigid_sim_yaml':
+                entry, center = entry_from_model(model, kind, resolver(str(path.parent)), 'uri')
+                return [body(entry, scene, str(path.parent), center, 'uri')], ()
+            bodies, springs = bodies_from_file(path, roots, **limits)
+            if len(bodies) != 1:
+                raise SpawnRefused('parse', f'uri: the file has {len(bodies)} bodies; '
+                                            'SpawnEntity spawns one entity (set the scene '
+                                            'parameter to load a scene of several)')
+            taken = {other.name for other in scene.bodies}
+            return [replace(bodies[0], name=entity_name(bodies[0].name, name, renaming,
+                                                        taken))], springs
+
+        def from_text(scene):
+            try:
+                kind = spawn_format(text)
+            except DescriptionRefused as refused:
+                raise SpawnRefused(refused.kind, f'resource_string: {refused}') from None
+            if kind == 'rigid_sim_yaml':
+                made = body(entry_from_text(text, limits['max_scene_bytes']), scene, '.',
+                            None, 'resource_string')
+                return made if default else placed(made, origin, orientation)
+            entry, center = entry_from_model(text, kind, resolver('.'))
+            made = body(entry, scene, '.', center, 'resource_string')
+            return placed(made, origin, orientation, compose=True)
 
         def build(scene):
             if uri:
-                bodies, springs = bodies_from_file(scene_path(uri), **limits)
-                if name is not None and len(bodies) > 1:
-                    raise SpawnRefused('name_invalid', f'name names one body; {shown(uri)} '
-                                                       f'has {len(bodies)}: leave it empty')
-                bodies = [placed(body, origin, orientation, compose=True) for body in bodies]
+                bodies, springs = from_uri(scene)
+                bodies = [placed(made, origin, orientation, compose=True) for made in bodies]
             elif text:
-                bodies = [body_from_text(text, scene, name, limits['max_scene_bytes'])]
-                springs = ()
-                if not default:
-                    bodies = [placed(bodies[0], origin, orientation)]
+                bodies, springs = [from_text(scene)], ()
             else:
                 raise SpawnRefused('no_resource', 'give a uri or a resource_string')
-            if name is not None:
-                bodies[0] = replace(bodies[0], name=name)
-            if renaming:
-                taken = {body.name for body in scene.bodies}
-                for index, body in enumerate(bodies):
-                    bodies[index] = replace(body, name=free_name(body.name, taken))
-                    taken.add(bodies[index].name)
             new = with_bodies(scene, bodies, springs)
             count = len(scene.bodies)
-            return new, [(i, i) for i in range(count)], [body.name for body in bodies]
+            return new, [(i, i) for i in range(count)], [made.name for made in bodies]
         return build
 
     def _on_spawn(self, request, response, reply):

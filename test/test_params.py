@@ -122,13 +122,14 @@ def test_shipped_parameter_file_lists_every_parameter_at_its_default(ros_context
     """Check config/rigid_sim.yaml names each parameter once, at its default value.
 
     The two that follow rate (time_step = 1/rate, publish_rate = rate) are only named in a
-    comment: the file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs.
+    comment: the file with -p rate:=50 still runs at real-time factor 1, 50 Hz outputs; so is
+    resource_paths, which follows the scene (its directory is allowed).
     """
     text = SHIPPED_PARAMETERS.read_text()
     listed = yaml.safe_load(text)['/**']['ros__parameters']
-    follow_rate = {'time_step', 'publish_rate'}
-    assert sorted(listed) == sorted(set(SPECS) - follow_rate)
-    assert all(f'# {name}:' in text for name in follow_rate)
+    follow = {'time_step', 'publish_rate', 'resource_paths'}
+    assert sorted(listed) == sorted(set(SPECS) - follow)
+    assert all(f'# {name}:' in text for name in follow)
     for rate in ([], ['-p', 'rate:=50']):
         with_file = RigidSimNode(context=ros_context, cli_args=[
             '--ros-args', '--params-file', str(SHIPPED_PARAMETERS), *rate])

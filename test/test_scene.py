@@ -226,17 +226,17 @@ def drop(*path):
 
 B0, SPRING0, SPRING1 = ('bodies', 0), ('effects', 'springs', 0), ('effects', 'springs', 1)
 MISTAKES = [  # (change, key path named, reason)
-    (put('colour', 'red'), 'colour', "unknown key 'colour'; valid keys: .*bodies"),
-    (put(*B0, 'colour', 'red'), 'bodies[0].colour', "unknown key 'colour'; valid keys: .*mass"),
-    (put(*B0, 'shape', 'colour', 1), 'bodies[0].shape.colour', "unknown key .*size"),
-    (put('effects', 'wind', {}), 'effects.wind', "unknown key 'wind'; valid keys: .*gravity"),
-    (put(*SPRING0, 'colour', 1), 'effects.springs[0].colour', 'unknown key .*stiffness'),
-    (put('limits', 'max_speed', 1.0), 'limits.max_speed', 'unknown key .*max_force'),
+    (put('colour', 'red'), 'colour', 'unknown key; valid keys: .*bodies'),
+    (put(*B0, 'colour', 'red'), 'bodies[0].colour', 'unknown key; valid keys: .*mass'),
+    (put(*B0, 'shape', 'colour', 1), 'bodies[0].shape.colour', "unknown key.*size"),
+    (put('effects', 'wind', {}), 'effects.wind', 'unknown key; valid keys: .*gravity'),
+    (put(*SPRING0, 'colour', 1), 'effects.springs[0].colour', 'unknown key.*stiffness'),
+    (put('limits', 'max_speed', 1.0), 'limits.max_speed', 'unknown key.*max_force'),
     (put(*B0, 'pose', 'position', 1.0), 'bodies[0].pose.position', 'list of 3 numbers'),
     (put(*B0, 'pose', 'position', [1.0, 2.0]), 'bodies[0].pose.position', 'list of 3'),
     (put(*B0, 'twist', 'angular', [0, 0, 'fast']), 'bodies[0].twist.angular[2]',
      'expected a number'),
-    (put(*B0, 'mass', '2.0'), 'bodies[0].mass', "expected a number, got the text '2.0'"),
+    (put(*B0, 'mass', '2.0'), 'bodies[0].mass', 'expected a number, got a text of 3 characters'),
     (put(*B0, 'mass', '1e4'), 'bodies[0].mass', 'unquoted: 1.0e4'),
     (put(*B0, 'mass', True), 'bodies[0].mass', 'expected a number, got the boolean'),
     (put(*B0, 'mass', float('nan')), 'bodies[0].mass', 'must be finite'),
@@ -271,7 +271,7 @@ MISTAKES = [  # (change, key path named, reason)
      'zero quaternion'),
     (put(*B0, 'pose', 'orientation', [0, 0, 1]), 'bodies[0].pose.orientation', 'list of 4'),
     (put(*B0, 'shape', 'type', 'cone'), 'bodies[0].shape.type',
-     "type in .*'box'.*got the text 'cone'"),
+     "type in .*'box'.*got a text of 4 characters"),
     (drop(*B0, 'shape', 'type'), 'bodies[0].shape.type', 'type in .*got nothing'),
     (put(*B0, 'shape', 'radius', 0.1), 'bodies[0].shape.radius',
      "valid keys: \\('type', 'size'\\)"),
@@ -279,7 +279,7 @@ MISTAKES = [  # (change, key path named, reason)
     (put(*B0, 'shape', {'type': 'mesh', 'file': 'no_such.stl'}), 'bodies[0].shape.file',
      'mesh not found'),
     (put(*B0, 'inertia', {'method': 'guess'}), 'bodies[0].inertia.method',
-     "expected one of .*'exact'.*got the text 'guess'"),
+     "expected one of .*'exact'.*got a text of 5 characters"),
     (put(*B0, 'inertia', {'diagonal': [0.01, 0.01, 0.05]}), 'bodies[0].inertia.diagonal',
      'triangle inequality'),
     (put(*B0, 'inertia', {'diagonal': [-0.01, 0.02, 0.02]}), 'bodies[0].inertia.diagonal',
@@ -327,10 +327,10 @@ def test_mistake_names_file_key_and_reason(change, key, reason):
 @pytest.mark.parametrize('text, key, reason', [
     ('bodies:\n  - name: box\n    shape: {type: box\n', 'line 4',
      "invalid YAML: (did not find )?expected ',' or '}'"),
-    ('bodies: []\nbodies: []\n', 'line 2', "invalid YAML: duplicate key 'bodies'"),
-    ('bodies:\n  - {name: a, mass: 1, mass: 2}\n', 'line 2', "duplicate key 'mass'"),
+    ('bodies: []\nbodies: []\n', 'line 2', 'invalid YAML: duplicate key'),
+    ('bodies:\n  - {name: a, mass: 1, mass: 2}\n', 'line 2', 'duplicate key'),
     ('- name: box\n', '(document)', 'expected a mapping .*bodies.*got a list'),
-    ('42\n', '(document)', 'expected a mapping .*got 42'),
+    ('42\n', '(document)', 'expected a mapping .*got a number'),
     ('', '(document)', 'expected a mapping .*got nothing'),
 ], ids=['syntax', 'duplicate', 'nested-duplicate', 'list', 'scalar', 'empty'])
 def test_unreadable_file_is_refused(tmp_path, text, key, reason):
@@ -343,7 +343,7 @@ def test_unreadable_file_is_refused(tmp_path, text, key, reason):
 
 def test_missing_file_is_refused(tmp_path):
     """A scene file that does not exist is a SceneError naming it."""
-    with pytest.raises(SceneError, match='nowhere\\.yaml: \\(file\\): No such file'):
+    with pytest.raises(SceneError, match='nowhere\\.yaml: \\(file\\): scene file not found'):
         load_scene(str(tmp_path / 'nowhere.yaml'))
 
 

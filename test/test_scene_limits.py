@@ -66,7 +66,7 @@ def test_huge_number_is_refused_with_the_reason(tmp_path):
     path = tmp_path / 'spin.yaml'
     path.write_text(scene_text(', twist: {angular: [0.0, 0.0, 1.0e200]}'))
     refused(path, re.escape('bodies[0].twist.angular[2]'),
-            'at most 1e\\+15 in magnitude.*1e\\+200')
+            'at most 1e\\+15 in magnitude.*got more')
     path.write_text(scene_text(', pose: {position: [1' + '0' * 40 + ', 0, 0]}'))
     refused(path, re.escape('bodies[0].pose.position[0]'), 'at most 1e\\+15')
     path.write_text(scene_text().replace('mass: 1.0', 'mass: 1.0e-300'))
@@ -103,7 +103,7 @@ def test_non_utf8_scene_is_refused_naming_the_byte(tmp_path):
 def test_control_character_and_oversized_integer_are_refused(tmp_path):
     path = tmp_path / 'control.yaml'
     path.write_text(scene_text() + '\x00')
-    refused(path, 'character \\d+', 'unacceptable character #x0000')
+    refused(path, 'character \\d+', 'unacceptable character')
     path.write_text(scene_text().replace('mass: 1.0', 'mass: ' + '9' * 5000))
     refused(path, re.escape('(file)'), 'invalid YAML value')
 
@@ -250,7 +250,7 @@ def test_yaml_merge_keys_work_as_in_yaml_and_count_towards_the_node_limit(tmp_pa
     assert (c.name, c.mass_properties.mass, c.origin.tolist()) == ('c', 1.0, [0.0, 0.0, 3.0])
     path.write_text('bodies:\n  - &ball {name: a, mass: 1.0, shape: {type: sphere, radius: 1.0}}'
                     '\n  - {<<: *ball, name: b, name: c}\n')   # merged keys aside, none twice
-    refused(path, re.escape('line 3, column 26'), "duplicate key 'name'")
+    refused(path, re.escape('line 3, column 26'), 'duplicate key')
     # Ten levels of ten merges of the level below: 10^10 keys, refused at its first levels.
     levels = ['k0: &l0 {x: 1}'] + [
         f'k{i}: &l{i} {{<<: [{", ".join([f"*l{i - 1}"] * 10)}], y{i}: 1}}' for i in range(1, 10)]
@@ -259,17 +259,17 @@ def test_yaml_merge_keys_work_as_in_yaml_and_count_towards_the_node_limit(tmp_pa
 
 
 def test_outside_text_in_a_refusal_is_clipped(tmp_path):
-    """A 100 kB key or name is quoted by its ends only."""
+    """A 100 kB name is quoted by its ends only; a key that is no name, by its place."""
     path = tmp_path / 'long.yaml'
     path.write_text(scene_text(name='n' * 100_000))
     assert len(refused(path, re.escape('bodies[0].name'), 'at most 100 letters')) < 2000
     path.write_text('? ' + 'k' * 100_000 + '\n: 1\n' + scene_text())
-    assert len(refused(path, r'k+\.{3}\(\d+ characters\)\.{3}k+', 'unknown key')) < 2000
+    assert len(refused(path, re.escape('(key 1)'), 'unknown key')) < 2000
 
 
 @pytest.mark.parametrize('value, words', [
-    ('[1, 2]', 'a list of 2'), ('{a: 1}', 'a mapping'), ('2001-01-01', 'datetime'),
-    ('null', 'nothing'), ('yes', 'the boolean true'), ('"2.0"', "the text '2.0'")])
+    ('[1, 2]', 'a list of 2'), ('{a: 1}', 'a mapping'), ('2001-01-01', 'a date value'),
+    ('null', 'nothing'), ('yes', 'the boolean true'), ('"2.0"', 'a text of 3 characters')])
 def test_wrong_types_are_refused_naming_the_key(tmp_path, value, words):
     """Every kind of value where a number belongs is named by what it is."""
     path = tmp_path / 'types.yaml'

@@ -102,7 +102,7 @@ def gate_prepare(sim):
 
 def gate_spawn(monkeypatch):
     gate = Gate()
-    monkeypatch.setattr(spawning, 'body_from_text', gate.wrap(spawning.body_from_text))
+    monkeypatch.setattr(spawning, 'entry_from_text', gate.wrap(spawning.entry_from_text))
     return gate
 
 

@@ -16,7 +16,6 @@ from rigid_sim.core.imu_noise import SensorNoise
 from rigid_sim.core.scene_fields import (
     ABSENT, MAX_MAGNITUDE, Mistake, non_negative, number, of_type, positive, raw, table, token,
     vector, fields)
-from rigid_sim.core.text import shown
 
 DEFAULT_NAME = 'imu'   # the name, and so the topic, of an IMU that gives none
 # The body's other topics ~/<body>/<topic>: an IMU named like one would share its topic.
@@ -110,7 +109,7 @@ def parse_imu(value, key, points, has_field):
     # Bounded as every number of a scene is, though numpy would take any size of seed.
     if not 0 <= imu['seed'] <= MAX_MAGNITUDE:
         raise Mistake(f'{key}.seed', f'must be a whole number >= 0 and at most '
-                                     f'{MAX_MAGNITUDE:g}, got {shown(imu["seed"])}')
+                                     f'{MAX_MAGNITUDE:g}')
     noise = imu.get('noise', {})
     if imu['magnetometer'] and not has_field:
         raise Mistake(f'{key}.magnetometer', 'the scene gives no magnetic_field (tesla, world '

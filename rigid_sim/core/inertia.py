@@ -163,8 +163,10 @@ def load_mesh(path, scale=1.0):
     except Exception as error:
         # trimesh's readers raise whatever a malformed file trips (IndexError for a short
         # OBJ vertex, KeyError for a PLY without y, ...): refuse the file by name instead.
-        raise ValueError(f'cannot read mesh file {clipped(path)}: {type(error).__name__}: '
-                         f'{clipped(error)}') from None
+        # The error's words may quote the file (numpy's "could not convert 'root:x:0'"):
+        # only its kind is told.
+        raise ValueError(f'cannot read mesh file {clipped(path)} '
+                         f'({type(error).__name__})') from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ValueError(f'no triangles in mesh file {clipped(path)}')
     mesh.apply_transform(np.diag(np.append(scale, 1.0)))

@@ -27,7 +27,7 @@ from rigid_sim.core.world import World
 from rigid_sim.core.scene_fields import (
     ABSENT, choice, count, describe, fields, list_of, matrix, Mistake, of_type,
     points, positive, quaternion, raw, REQUIRED, scale, size, table, token, vector)
-from rigid_sim.core.scene_file import FileRefused, load_yaml
+from rigid_sim.core.scene_file import confined, FileRefused, load_yaml
 from rigid_sim.core.scene_limits import Budget, operator_limits, raise_note, WORK_LIMITS
 from rigid_sim.core.text import clipped, shown
 
@@ -116,8 +116,11 @@ SCENE = {'world_frame': (token, 'world'),
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
 
 
-def _shape(value, key, base_dir):
-    """Validate a shape dict; a mesh file is resolved against the scene's directory."""
+def _shape(value, key, base_dir, roots=None):
+    """Validate a shape dict; a mesh file is resolved against the scene's directory.
+
+    The file must be in one of ``roots`` (:func:`rigid_sim.core.scene_file.confined`).
+    """
     kind = value.get('type') if isinstance(value, dict) else None
     if not isinstance(kind, str) or kind not in SHAPES:
         where = f'{key}.type' if isinstance(value, dict) else key
@@ -126,12 +129,12 @@ def _shape(value, key, base_dir):
     shape = fields(value, key, {'type': (raw, REQUIRED), **SHAPES[kind]})
     if kind == 'mesh':
         try:
-            shape['file'] = os.path.abspath(os.path.join(base_dir, shape['file']))
+            shape['file'] = confined(os.path.join(base_dir, shape['file']), roots, 'mesh')
+        except FileRefused as refused:
+            raise Mistake(f'{key}.file', f'{refused.reason} (a relative path starts at the '
+                                         "scene file's directory)") from None
         except ValueError as error:  # an embedded NUL
             raise Mistake(f'{key}.file', str(error)) from None
-        if not os.path.lexists(shape['file']):
-            raise Mistake(f'{key}.file', f'mesh not found: {clipped(shape["file"])} (a '
-                                         "relative path starts at the scene file's directory)")
     return shape
 
 
@@ -177,7 +180,7 @@ def parse_body(value, key, budget, has_field):
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
         raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
-    shape = _shape(body['shape'], f'{key}.shape', budget.base_dir)
+    shape = _shape(body['shape'], f'{key}.shape', budget.base_dir, budget.roots)
     inertia = _inertia(body['inertia'], f'{key}.inertia')
     if body['goal']['unknowns'] == 'wrench' and not body['wrench_input']:
         raise Mistake(f'{key}.goal.unknowns', 'a wrench needs wrench_input: true')
@@ -269,8 +272,11 @@ def _effects(listed, bodies):
     return {name: settings for name, settings in resolved.items() if settings is not None}
 
 
-def parse_scene(data, path='<memory>', base_dir='.', **limits):
+def parse_scene(data, path='<memory>', base_dir='.', roots=None, **limits):
     """Validate an already-loaded scene mapping; mesh files are relative to ``base_dir``.
+
+    A mesh file must be in one of the directories ``roots`` (real paths; None: anywhere).
+    The roots are the caller's: nothing in a scene widens them.
 
     A non-unit orientation quaternion is normalised; a zero one is refused. Raises
     :class:`SceneError` naming ``path``, the key and the reason for any mistake. ``limits``
@@ -283,7 +289,7 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
         scene = fields(data, '', SCENE)
         asked = scene['limits']
         budget = Budget({name: asked.pop(name) for name in WORK_LIMITS if name in asked},
-                        allowed, base_dir)
+                        allowed, base_dir, roots)
         field = scene.get('magnetic_field')
         bodies = _bodies(scene['bodies'], scene['world_frame'], budget, field is not None)
         effects = _effects(scene['effects'], bodies)
@@ -294,8 +300,11 @@ def parse_scene(data, path='<memory>', base_dir='.', **limits):
                  **scene['limits'])
 
 
-def load_scene(path, **limits):
+def load_scene(path, roots=None, **limits):
     """Read and validate the scene file at ``path``; see :func:`parse_scene`.
+
+    ``path`` and its mesh files must be in one of the directories ``roots`` (real paths;
+    None: anywhere); any other file is refused unopened, as one that does not exist.
 
     Loads with PyYAML's safe loader (no arbitrary objects, YAML 1.2 floats), made to refuse
     duplicate keys, after the checks of :mod:`rigid_sim.core.scene_file`: a regular file of
@@ -306,10 +315,11 @@ def load_scene(path, **limits):
     """
     allowed = operator_limits(limits)
     try:
-        data = load_yaml(path, allowed['max_scene_bytes'], raise_note('max_scene_bytes'))
+        real = confined(path, roots, 'scene file')
+        data = load_yaml(real, allowed['max_scene_bytes'], raise_note('max_scene_bytes'))
     except FileRefused as refused:
         raise SceneError(path, refused.where, refused.reason) from None
-    return parse_scene(data, path, os.path.dirname(os.path.abspath(path)),
+    return parse_scene(data, path, os.path.dirname(real), roots,
                        **{name: allowed[name] for name in WORK_LIMITS})
 
 

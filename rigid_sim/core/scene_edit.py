@@ -22,13 +22,15 @@ from scipy.spatial.transform import Rotation
 from rigid_sim.core import body_state
 from rigid_sim.core.scene import (
     load_scene, parse_body, SceneError, world_frame_clash)
-from rigid_sim.core.scene_fields import Mistake, token
+from rigid_sim.core.robot_description import DescriptionRefused, model_body
+from rigid_sim.core.scene_fields import describe, Mistake, token
 from rigid_sim.core.scene_file import FileRefused, MAX_SCENE_BYTES, parse_yaml
 from rigid_sim.core.scene_limits import Budget
 
-# What a refusal is about: the name, the text or file, an asset it names, the pose, or
-# that nothing was given.
-KINDS = ('name_taken', 'name_invalid', 'parse', 'missing_asset', 'pose', 'no_resource')
+# What a refusal is about: the name, the text or file, a format not served, an asset it
+# names, the pose, or that nothing was given.
+KINDS = ('name_taken', 'name_invalid', 'parse', 'unsupported', 'missing_asset', 'pose',
+         'no_resource')
 
 
 class SpawnRefused(ValueError):
@@ -53,41 +55,83 @@ def check_name(name, where='name'):
         raise SpawnRefused('name_invalid', f'{mistake.key}: {mistake.reason}') from None
 
 
-def body_from_text(text, scene, name=None, max_bytes=MAX_SCENE_BYTES, base_dir='.'):
+def body_from_text(text, scene, name=None, max_bytes=MAX_SCENE_BYTES, base_dir='.',
+                   roots=None):
     """One :class:`BodySpec` from ``text``, a body entry of the scene format (YAML).
 
     ``name``, when given, replaces the entry's own. The entry is checked as an item of a
     scene's ``bodies:`` would be, within ``scene``'s limits, and ``text`` is at most
-    ``max_bytes`` long; a mesh file is relative to ``base_dir``. Raises SpawnRefused.
+    ``max_bytes`` long; a mesh file is relative to ``base_dir`` and must be in one of
+    ``roots`` (None: anywhere). Raises SpawnRefused.
     """
-    where = 'resource_string'
+    entry = entry_from_text(text, max_bytes)
+    if name is not None:
+        entry = {**entry, 'name': name}
+    return checked_body(entry, scene, base_dir, roots)
+
+
+def entry_from_text(text, max_bytes=MAX_SCENE_BYTES, where='resource_string'):
+    """Return the body entry (a mapping) the YAML ``text`` holds, unchecked; or SpawnRefused."""
     try:
         entry = parse_yaml(text, max_bytes)
     except FileRefused as refused:
         raise SpawnRefused('parse', f'{where}: {refused.where}: {refused.reason}') from None
     if not isinstance(entry, dict):
         raise SpawnRefused('parse', f'{where}: expected one body entry (a mapping with name, '
-                                    f'shape, mass, ...), got {type(entry).__name__}')
-    if name is not None:
-        entry = {**entry, 'name': name}
+                                    f'shape, mass, ...), got {describe(entry)}')
+    return entry
+
+
+def entry_from_model(text, spawn_format, resolve, where='resource_string'):
+    """Return the body entry and centre of mass of a one-link URDF or SDFormat model.
+
+    See :func:`rigid_sim.core.robot_description.model_body`.
+    """
     try:
-        budget = Budget({}, scene.work_limits, base_dir)
-        return parse_body(entry, '', budget, scene.magnetic_field is not None)
+        return model_body(text, spawn_format, resolve)
+    except DescriptionRefused as refused:
+        raise SpawnRefused(refused.kind, f'{where}: {refused}') from None
+
+
+def checked_body(entry, scene, base_dir='.', roots=None, center_of_mass=None,
+                 where='resource_string'):
+    """Return the :class:`BodySpec` of ``entry``, checked as an item of ``bodies:`` would be.
+
+    Within ``scene``'s limits; a mesh file is relative to ``base_dir`` and in one of
+    ``roots`` (None: anywhere). ``center_of_mass`` ((3,) m, body frame), when given,
+    replaces the shape's, as a model's ``<inertial>`` places it. Raises SpawnRefused.
+    """
+    try:
+        budget = Budget({}, scene.work_limits, base_dir, roots)
+        body = parse_body(entry, '', budget, scene.magnetic_field is not None)
     except Mistake as mistake:
         raise _parse_refusal(SceneError(where, mistake.key.lstrip('.') or '(entry)',
                                         mistake.reason)) from None
+    if center_of_mass is None:
+        return body
+    properties = replace(body.mass_properties,
+                         center_of_mass=np.asarray(center_of_mass, dtype=float))
+    return replace(body, mass_properties=properties)
 
 
-def bodies_from_file(path, **limits):
+def bodies_from_file(path, roots=None, **limits):
     """Return the bodies and springs of the scene file at ``path``, by the scene loader.
 
-    ``limits`` are the operator's, as :func:`rigid_sim.core.scene.load_scene` takes them.
-    Returns (bodies, springs): springs index the file's own bodies. Raises SpawnRefused.
+    ``roots`` and ``limits`` are the operator's, as :func:`rigid_sim.core.scene.load_scene`
+    takes them. Returns (bodies, springs): springs index the file's own bodies. Raises
+    SpawnRefused, also for a file with effects other than springs: the running scene's
+    effects act on spawned bodies, and a file's gravity dropped in silence would be a
+    different motion than the file describes.
     """
     try:
-        loaded = load_scene(path, **limits)
+        loaded = load_scene(path, roots, **limits)
     except SceneError as error:
         raise _parse_refusal(error) from None
+    dropped = sorted(set(loaded.effects) - {'springs'})
+    if dropped:
+        raise SpawnRefused('parse', f'uri: the file has effects {dropped}, which are not '
+                                    "spawned (the running scene's effects act on every body): "
+                                    'spawn a file whose effects are at most springs')
     return loaded.bodies, loaded.effects.get('springs', ())
 
 

@@ -4,14 +4,16 @@
 
 A field table maps a key to (checker, default); :func:`fields` walks one, so the scene
 format is written down once, as data, in :mod:`rigid_sim.core.scene`.
+
+A message says where (the key path) and what kind of value is there, never the value: a
+scene may come from a file a client named, and what the file holds is not the client's to
+read (:mod:`rigid_sim.core.scene_file`).
 """
 import math
 import re
 from functools import partial
 
 import numpy as np
-
-from rigid_sim.core.text import clipped, shown
 
 # Body and point names become topic names and frame ids (~/<body>/wrench, <body>/<point>),
 # so they are REP-144 name tokens, short enough for DDS topic names.
@@ -22,6 +24,9 @@ NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]{0,99}\Z')
 MAX_MAGNITUDE = 1e15
 # Below this norm a quaternion has no direction left to normalise to.
 MIN_QUATERNION_NORM = 1e-9
+# A key shown in a key path as written: a name as the scene format's keys are. Another key
+# (text with spaces, a number, a date) is shown by its position in its mapping.
+KEY_TEXT = re.compile(r'[A-Za-z_][A-Za-z0-9_-]{0,99}\Z')
 # Field-table defaults: the key must be given / the key stays out of the result when absent.
 REQUIRED, ABSENT = object(), object()
 
@@ -35,16 +40,25 @@ class Mistake(Exception):
 
 
 def describe(value):
-    """Words for what YAML produced, for messages."""
+    """Words for what kind of value YAML produced, for messages; never the value itself."""
     if isinstance(value, bool) or value is None:
         return {True: 'the boolean true', False: 'the boolean false', None: 'nothing'}[value]
     if isinstance(value, str):
         hint = ' (write numbers unquoted: 1.0e4)'
         looks_numeric = re.fullmatch(r'[-+.\deE]+', value)
-        return f'the text {shown(value)}' + (hint if looks_numeric else '')
+        return f'a text of {len(value)} characters' + (hint if looks_numeric else '')
     if isinstance(value, (list, tuple)):
         return f'a list of {len(value)}'
-    return 'a mapping' if isinstance(value, dict) else shown(value)
+    if isinstance(value, (int, float)):
+        return 'a number'
+    return 'a mapping' if isinstance(value, dict) else f'a {type(value).__name__} value'
+
+
+def key_name(name, index):
+    """``name`` as a key path shows it: as written if it is a name, else ``(key N)``."""
+    if isinstance(name, str) and KEY_TEXT.match(name):
+        return name
+    return f'(key {index + 1})'
 
 
 def fields(value, key, spec):
@@ -57,10 +71,10 @@ def fields(value, key, spec):
     if not isinstance(value, dict):
         raise Mistake(key, f'expected a mapping with keys {valid}, got {describe(value)}')
     prefix = f'{key}.' if key else ''
-    for name in value:
+    for index, name in enumerate(value):
         if name not in spec:
-            raise Mistake(f'{prefix}{clipped(name)}',
-                          f'unknown key {shown(name)}; valid keys: {valid}')
+            raise Mistake(f'{prefix}{key_name(name, index)}',
+                          f'unknown key; valid keys: {valid}')
     for name, (_, default) in spec.items():
         if default is REQUIRED and name not in value:
             raise Mistake(f'{prefix}{name}', 'missing required key')
@@ -90,22 +104,16 @@ def number(value, key, bound=None):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise Mistake(key, f'expected a number, got {describe(value)}')
     if isinstance(value, float) and not math.isfinite(value):
-        raise Mistake(key, f'must be finite, got {value}')
+        raise Mistake(key, f'must be finite, got {value}')   # nan or inf: nothing to hide
     if (bound == 'positive' and value <= 0) or (bound == 'non-negative' and value < 0):
-        raise Mistake(key, f'must be {bound}, got {_number_text(value)}')
+        raise Mistake(key, f'must be {bound}, got {"zero" if value == 0 else "less"}')
     if abs(value) > MAX_MAGNITUDE:  # an int may be too large for a float at all
         raise Mistake(key, f'must be at most {MAX_MAGNITUDE:g} in magnitude (products of '
-                           f'such numbers in the state would overflow), got '
-                           f'{_number_text(value)}')
+                           'such numbers in the state would overflow), got more')
     if bound == 'positive' and value < 1.0 / MAX_MAGNITUDE:
         raise Mistake(key, f'must be at least {1.0 / MAX_MAGNITUDE:g} (its inverse scales '
-                           f'accelerations), got {_number_text(value)}')
+                           'accelerations), got less')
     return float(value)
-
-
-def _number_text(value):
-    """Format a number as written: shortest exact float, an int whole unless it is huge."""
-    return repr(value) if isinstance(value, float) else shown(value)
 
 
 def count(value, key):
@@ -115,7 +123,7 @@ def count(value, key):
     if isinstance(value, bool) or not isinstance(value, int):
         raise Mistake(key, f'expected a whole number, got {describe(value)}')
     if value < 1:
-        raise Mistake(key, f'must be positive, got {_number_text(value)}')
+        raise Mistake(key, 'must be positive, got less than 1')
     return value
 
 
@@ -190,5 +198,5 @@ def of_type(kind, what):
 def points(value, key):
     if not isinstance(value, dict):
         raise Mistake(key, f'expected a mapping of name: [x, y, z], got {describe(value)}')
-    return {token(name, f'{key}.{clipped(name)}'): vector(point, f'{key}.{name}')
-            for name, point in value.items()}
+    return {token(name, f'{key}.{key_name(name, index)}'): vector(point, f'{key}.{name}')
+            for index, (name, point) in enumerate(value.items())}

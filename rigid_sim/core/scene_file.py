@@ -8,6 +8,12 @@ before any Python object is built, and an alias counts as the whole node it repe
 "billion laughs" file is refused at its first few kilobytes. The limits below guard the
 parsing that reads a scene's own ``limits:``, so a scene cannot raise them: nesting and node
 count are fixed, the file size is the operator's (``MAX_SCENE_BYTES`` by default).
+
+Which files may be read at all is the caller's: :func:`confined` takes the directories it
+allows (``roots``) and refuses any other path before it is opened, with one answer whether
+or not something exists there. No message quotes what a file holds: a refusal names the
+position (line and column, or the key path) and what is wrong, never the text found there,
+so a file that is read by mistake (a key, a password file) is not shown to whoever named it.
 """
 import os
 import re
@@ -31,12 +37,67 @@ MERGE_TAG = 'tag:yaml.org,2002:merge'
 _BASE = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)  # libyaml's C parser when built
 
 
+# A quoted part of a YAML parser's message that may stay: one punctuation mark (the syntax
+# expected) or a token's name such as '<block end>'; anything else quoted is the file's text.
+YAML_SYNTAX = re.compile(r"'(?:[^\w\s]|<[a-z ]+>)'")
+QUOTED = re.compile(r"'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"")
+
+
 class FileRefused(ValueError):
     """A file that is not read; ``where`` is a position or ``(file)``, ``reason`` says why."""
 
     def __init__(self, where, reason):
         super().__init__(f'{where}: {reason}')
         self.where, self.reason = where, reason
+
+
+def confined(path, roots, what):
+    """Return the real path of ``path`` if it is in one of ``roots``, else FileRefused.
+
+    Symbolic links and ``..`` are resolved first (``os.path.realpath`` reads links, it opens
+    no file), so neither leads out of a root. A path outside every root is refused exactly
+    as one that does not exist, before anything there is opened: the answer tells nothing
+    about files outside the roots.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Absolute, or relative to the working directory.
+    roots : sequence of str or None
+        Real paths of the allowed directories; None allows every file (the core used as a
+        library, where the caller is the operator).
+    what : str
+        Words for the file in the refusal (``'mesh file'``).
+
+    Raises
+    ------
+    FileRefused
+        At ``(file)``: not found in the allowed directories (or not a path at all).
+    """
+    try:
+        real = os.path.realpath(path)
+    except (OSError, ValueError):  # an embedded NUL, a loop of links
+        real = None
+    if roots is None:
+        if real is None or not os.path.lexists(real):
+            raise FileRefused('(file)', f'{what} not found: {clipped(path)}')
+        return real
+    if real is None or not any(_inside(real, root) for root in roots) \
+            or not os.path.lexists(real):
+        raise FileRefused('(file)', not_found(what, roots))
+    return real
+
+
+def not_found(what, roots):
+    """Return the one refusal of a file outside ``roots`` or missing there: it tells neither."""
+    return f'{what} not found in the allowed resource directories {clipped(list(roots), 400)}'
+
+
+def _inside(path, root):
+    try:
+        return os.path.commonpath([path, root]) == root
+    except ValueError:  # one relative, one absolute
+        return False
 
 
 def check_file(path, max_bytes, what, limit_note=''):
@@ -128,7 +189,7 @@ class SceneLoader(_BASE):
                 continue  # the base class refuses it, saying so
             if key in seen:
                 raise yaml.constructor.ConstructorError(
-                    None, None, f'duplicate key {key!r}', key_node.start_mark)
+                    None, None, 'duplicate key', key_node.start_mark)
             seen.add(key)
         return super().construct_mapping(node, deep)
 
@@ -222,12 +283,24 @@ def parse_yaml(text, max_bytes=MAX_SCENE_BYTES):
                    if error.context and error.context_mark else '')
         mark = error.problem_mark or error.context_mark
         raise FileRefused(where(mark) if mark else '(file)',
-                          f'invalid YAML: {error.problem}{context}') from None
+                          f'invalid YAML: {syntax_only(error.problem)}'
+                          f'{syntax_only(context)}') from None
     except yaml.reader.ReaderError as error:
-        raise FileRefused(f'character {error.position}', f'invalid YAML: unacceptable '
-                          f'character #x{error.character:04x}: {error.reason}') from None
+        raise FileRefused(f'character {error.position}', 'invalid YAML: unacceptable '
+                          f'character ({error.reason})') from None
     except yaml.YAMLError as error:
-        raise FileRefused('(file)', f'invalid YAML: {clipped(error)}') from None
+        raise FileRefused('(file)', f'invalid YAML ({type(error).__name__})') from None
     except Exception as error:  # a constructor on a value it cannot hold: 5000 digits, Feb 30
-        raise FileRefused('(file)', f'invalid YAML value: {type(error).__name__}: '
-                                    f'{clipped(error)}') from None
+        raise FileRefused('(file)', f'invalid YAML value ({type(error).__name__}: a number '
+                                    'too long, a date that does not exist, ...)') from None
+
+
+def syntax_only(problem):
+    """Return a YAML parser's ``problem`` without the text of the file it quotes.
+
+    PyYAML quotes what it found (a character, an undefined alias, a tag), each replaced by
+    ``(...)``; the syntax it expected (``expected ',' or '}'``) stays.
+    """
+    def keep_syntax(match):
+        return match.group(0) if YAML_SYNTAX.fullmatch(match.group(0)) else '(...)'
+    return clipped(QUOTED.sub(keep_syntax, problem or ''), 400)

@@ -64,6 +64,8 @@ class Budget:
         The operator's limits (:func:`operator_limits`).
     base_dir : str
         The scene's directory, where relative mesh paths start.
+    roots : sequence of str or None
+        Real paths of the directories mesh files may be in; None: anywhere.
 
     Raises
     ------
@@ -71,7 +73,7 @@ class Budget:
         At ``limits.<name>`` when the scene asks for more than the operator allows.
     """
 
-    def __init__(self, asked, allowed, base_dir):
+    def __init__(self, asked, allowed, base_dir, roots=None):
         for name, value in asked.items():
             if value > allowed[name]:
                 raise Mistake(f'limits.{name}', f"{value} is above the operator's limit of "
@@ -81,7 +83,7 @@ class Budget:
         self.limits = {name: asked.get(name, allowed[name]) for name in WORK_LIMITS}
         self._notes = {name: f"the scene's own limits.{name}" if name in asked
                        else raise_note(name) for name in WORK_LIMITS}
-        self.base_dir = base_dir
+        self.base_dir, self.roots = base_dir, roots
         self.samples = self.limits['max_samples']
         self.mesh_bytes = self.limits['max_mesh_bytes']
         self._meshes = {}   # (absolute path, scale) -> trimesh.Trimesh

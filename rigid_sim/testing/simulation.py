@@ -46,6 +46,8 @@ class Simulation:
         test need one each (``/clock``, ``/tf`` and ``/diagnostics`` stay shared).
     **parameters
         Further parameters of the node (``time_step``, ``integrator``, ...).
+        ``resource_paths`` defaults to ``['/']``: the test is the operator, and its
+        scenes and meshes are wherever it writes them.
     """
 
     def __init__(self, context, executor, scene=None, yaml=None, namespace=None,
@@ -60,6 +62,7 @@ class Simulation:
                 stream.write(yaml)
         if scene is not None:
             parameters['scene'] = scene
+        parameters.setdefault('resource_paths', ['/'])
         overrides = [Parameter(name, value=value) for name, value in parameters.items()]
         self.context, self.executor = context, executor
         self.node, self._nodes = None, []
