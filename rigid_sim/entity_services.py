@@ -8,17 +8,62 @@ velocity, in ``world_frame`` (``header.frame_id`` empty or ``world_frame``) or, 
 SetEntityState and a spawn's ``initial_pose``, relative to another entity's frame. A state
 is set at once, between two ticks, so the answer means it is applied. Spawns and deletes are
 in :mod:`rigid_sim.spawning`.
+
+The name filter is a POSIX extended regular expression, as the standard says, matched by RE2:
+its work is linear in the name's length whatever the pattern (no backtracking, so no pattern
+can hold the executor), its memory is capped, and it speaks the POSIX classes
+(``[[:alpha:]]``). GetEntitiesStates takes one snapshot of every body frame at the call
+(one vectorised pass) and builds the answer's messages in slices of executor time, so a big
+scene's answer never holds control up.
 """
-import re
+from collections import deque
+from time import perf_counter
+
+from rclpy.clock import Clock, ClockType
+import re2
 
 from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
+from rigid_sim.core.state import frame_rows
 from rigid_sim.core.text import clipped, shown
+from rigid_sim.tick_loop import SLICE
 
 from simulation_interfaces import msg as si_msg, srv as si_srv
 
 # Characters of an answer's error_message: its outside text is quoted cut already.
 MESSAGE_LIMIT = 1000
+# Characters of a name filter: a longer one is refused, never cut. A name pattern needs far
+# fewer; this bounds the compile (RE2's is linear in the pattern) and the nesting.
+FILTER_LIMIT = 1000
+# Bytes RE2 may use for one compiled filter (its default is 8 MiB); a pattern whose
+# automaton needs more (a{1000}{1000}) is refused at compile.
+FILTER_MEMORY = 1 << 20
+
+
+def _filter_options():
+    """RE2 options for POSIX extended syntax, leftmost-longest, ``^``/``$`` at the name's ends."""
+    options = re2.Options()
+    options.posix_syntax = True     # no Perl classes (\d, \b) or (?i): POSIX ERE
+    options.longest_match = True
+    options.one_line = True
+    options.max_mem = FILTER_MEMORY
+    options.log_errors = False      # the refusal says it; nothing on the node's stderr
+    return options
+
+
+def compiled_filter(text):
+    """Return the compiled name filter ``text`` (a POSIX ERE), or ValueError saying why not."""
+    if len(text) > FILTER_LIMIT:
+        raise ValueError(f'filter of {len(text)} characters, above the limit of '
+                         f'{FILTER_LIMIT}')
+    try:
+        return re2.compile(text, _filter_options())
+    except re2.error as error:
+        reason = error.args[0] if error.args else error
+        if isinstance(reason, bytes):
+            reason = reason.decode('utf-8', 'replace')
+        raise ValueError(f'filter {shown(text)} is not a POSIX extended regular expression '
+                         f'RE2 accepts: {clipped(str(reason), 200)}') from None
 
 
 def result(code, message=''):
@@ -57,28 +102,34 @@ class EntityServices:
                 (srv.SetEntityState, 'set_entity_state', self._on_set_state)):
             deferred.create_service(node, kind, f'~/{name}', callback)
 
+        self._builds = SlicedBuilds(node)
+
     def _index(self, name):
         """Scene index of entity ``name``, or None."""
         names = self._node.world.bodies.names
         return names.index(name) if name in names else None
 
     def _matching(self, filters):
-        """Names passing ``filters`` (a name regex), or a (code, reason) refusal."""
+        """Scene indices of the bodies passing ``filters`` (a name ERE), or a (code, reason)."""
         Result = si_msg.Result
         if filters.categories or filters.tags.tags or filters.bounds.type:
             return Result.RESULT_FEATURE_UNSUPPORTED, 'only the name filter is supported'
+        names = self._node.world.bodies.names
+        if not filters.filter:
+            return list(range(len(names)))
         try:
-            pattern = re.compile(filters.filter)
-        except re.error as error:
-            return Result.RESULT_OPERATION_FAILED, f'filter {shown(filters.filter)}: {error}'
-        return [name for name in self._node.world.bodies.names if pattern.search(name)]
+            pattern = compiled_filter(filters.filter)
+        except ValueError as error:
+            return Result.RESULT_OPERATION_FAILED, str(error)
+        return [index for index, name in enumerate(names) if pattern.search(name)]
 
     def _on_entities(self, request, response, reply):
         found = self._matching(request.filters)
         if isinstance(found, tuple):
             response.result = result(*found)
             return response
-        response.entities = found
+        names = self._node.world.bodies.names
+        response.entities = [names[index] for index in found]
         response.result = result(si_msg.Result.RESULT_OK)
         return response
 
@@ -104,9 +155,17 @@ class EntityServices:
         return response
 
     def _on_states(self, request, response, reply):
-        response = self._on_entities(request, response, reply)   # no entity on a refusal
-        response.states = [self._state_message(self._index(name)) for name in response.entities]
-        return response
+        found = self._matching(request.filters)
+        if isinstance(found, tuple):
+            response.result = result(*found)     # no entity on a refusal
+            return response
+        world, names = self._node.world, self._node.world.bodies.names
+        response.entities = [names[index] for index in found]
+        response.result = result(si_msg.Result.RESULT_OK)
+        # The snapshot: every frame at once, now; the messages are built from it later.
+        rows = frame_rows(world.bodies, world.y)[found, :13].tolist() if found else []
+        build = StatesBuild(response, rows, self._node.settings.world_frame, world.time, reply)
+        return response if build.run(perf_counter() + SLICE) else self._builds.add(build)
 
     def _on_set_state(self, request, response, reply):
         Result, node = si_msg.Result, self._node
@@ -140,3 +199,78 @@ class EntityServices:
         self._changed()
         response.result = result(Result.RESULT_OK)
         return response
+
+
+class StatesBuild:
+    """The EntityState messages of one GetEntitiesStates answer, built from a snapshot.
+
+    Parameters
+    ----------
+    response : GetEntitiesStates.Response
+        Filled (``states``) and sent through ``reply`` when every message is built.
+    rows : list of list of float
+        Per entity, its body frame's origin (3), orientation (4, x, y, z, w), origin velocity
+        (3) and angular velocity (3), world axes, at the call.
+    frame_id : str
+        The world frame's name.
+    time : float
+        Simulated time of the snapshot, s.
+    reply : deferred.Reply
+        Sends the answer when it is built over several slices.
+    """
+
+    def __init__(self, response, rows, frame_id, time, reply):
+        self._response, self._rows, self._reply = response, rows, reply
+        self._frame_id, self._stamp = frame_id, conversions.to_time(time)
+        self._states = []
+
+    def run(self, until):
+        """Build messages until ``perf_counter()`` passes ``until``; True when all are built."""
+        states, rows = self._states, self._rows
+        start = len(states)
+        while len(states) < len(rows):
+            built = len(states) - start
+            if built and built % 64 == 0 and perf_counter() > until:
+                return False
+            row = rows[len(states)]
+            state = si_msg.EntityState()
+            state.header.frame_id = self._frame_id
+            state.header.stamp = self._stamp
+            conversions.fill_pose(state.pose, row[0:3], row[3:7])
+            conversions.fill_twist(state.twist, row[7:10], row[10:13])
+            states.append(state)
+        self._response.states = states
+        return True
+
+    def send(self):
+        """Send the finished answer."""
+        self._reply(self._response)
+
+
+class SlicedBuilds:
+    """Runs answers too big for one slice, a ``SLICE`` of executor time per round, in order.
+
+    Between two slices the executor answers everything else (control, parameters, signals),
+    as between the tick loop's slices.
+    """
+
+    def __init__(self, node):
+        self._queue = deque()
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = node.create_timer(0.0, self._on_timer, clock=steady)
+        self._timer.cancel()
+
+    def add(self, build):
+        """Queue ``build`` (a started :class:`StatesBuild`); LATER, its callback's answer."""
+        self._queue.append(build)
+        self._timer.reset()
+        return deferred.LATER
+
+    def _on_timer(self):
+        until = perf_counter() + SLICE
+        while self._queue and perf_counter() < until:
+            if not self._queue[0].run(until):
+                return
+            self._queue.popleft().send()
+        if not self._queue:
+            self._timer.cancel()
