@@ -48,8 +48,10 @@ setup(
         share_files('rviz', '.rviz'),
     ] + tree_files('config') + tree_files('interfaces'),
     python_requires='>=3.10',
-    # rtree: trimesh's ray queries, used by the sampling inertia method.
-    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree'],
+    # rtree: trimesh's ray queries, used by the sampling inertia method. google-re2: the
+    # entity services' name filter, a POSIX ERE matched in linear time.
+    install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree',
+                      'google-re2'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the

@@ -20,7 +20,10 @@ from collections import deque
 from time import perf_counter
 
 from rclpy.clock import Clock, ClockType
-import re2
+try:
+    import re2
+except ImportError:   # a ROS install has no rosdep key for it: filters are refused, not run
+    re2 = None
 
 from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
@@ -35,8 +38,10 @@ MESSAGE_LIMIT = 1000
 # Characters of a name filter: a longer one is refused, never cut. A name pattern needs far
 # fewer; this bounds the compile (RE2's is linear in the pattern) and the nesting.
 FILTER_LIMIT = 1000
-# Bytes RE2 may use for one compiled filter (its default is 8 MiB); a pattern whose
-# automaton needs more (a{1000}{1000}) is refused at compile.
+NO_RE2 = ('name filters need RE2 (linear-time POSIX regular expressions): pip install '
+          'google-re2; an empty filter lists every entity')
+# Bytes RE2 may use for one compiled filter (its default is 8 MiB): a bigger program is
+# refused at compile, as RE2 refuses repetitions above 1000 in all (a{1000}{1000}).
 FILTER_MEMORY = 1 << 20
 
 
@@ -117,6 +122,8 @@ class EntityServices:
         names = self._node.world.bodies.names
         if not filters.filter:
             return list(range(len(names)))
+        if re2 is None:
+            return Result.RESULT_FEATURE_UNSUPPORTED, NO_RE2
         try:
             pattern = compiled_filter(filters.filter)
         except ValueError as error:
