@@ -12,11 +12,13 @@ in :mod:`rigid_sim.spawning`.
 The name filter is a POSIX extended regular expression, as the standard says, matched by RE2:
 its work is linear in the name's length whatever the pattern (no backtracking, so no pattern
 can hold the executor), its memory is capped, and it speaks the POSIX classes
-(``[[:alpha:]]``). GetEntitiesStates takes one snapshot of every body frame at the call
-(one vectorised pass) and builds the answer's messages in slices of executor time, so a big
+(``[[:alpha:]]``). GetEntities and GetEntitiesStates take one snapshot at the call (the
+names, and every body frame in one vectorised pass), then match the names and build the
+states' messages in slices of executor time and send a big answer from a thread, so a big
 scene's answer never holds control up.
 """
 from collections import deque
+from threading import Thread
 from time import perf_counter
 
 from rclpy.clock import Clock, ClockType
@@ -114,31 +116,35 @@ class EntityServices:
         names = self._node.world.bodies.names
         return names.index(name) if name in names else None
 
-    def _matching(self, filters):
-        """Scene indices of the bodies passing ``filters`` (a name ERE), or a (code, reason)."""
+    def _pattern(self, filters):
+        """Return the compiled name filter of ``filters`` (None: all), or a (code, reason)."""
         Result = si_msg.Result
         if filters.categories or filters.tags.tags or filters.bounds.type:
             return Result.RESULT_FEATURE_UNSUPPORTED, 'only the name filter is supported'
-        names = self._node.world.bodies.names
         if not filters.filter:
-            return list(range(len(names)))
+            return None
         if re2 is None:
             return Result.RESULT_FEATURE_UNSUPPORTED, NO_RE2
         try:
-            pattern = compiled_filter(filters.filter)
+            return compiled_filter(filters.filter)
         except ValueError as error:
             return Result.RESULT_OPERATION_FAILED, str(error)
-        return [index for index, name in enumerate(names) if pattern.search(name)]
+
+    def _answer(self, request, response, reply, with_states):
+        """Start the answer of GetEntities (or GetEntitiesStates); the response or LATER."""
+        pattern = self._pattern(request.filters)
+        if isinstance(pattern, tuple):
+            response.result = result(*pattern)     # no entity on a refusal
+            return response
+        world = self._node.world
+        # The snapshot: the names and, for states, every body frame at once, now.
+        frames = frame_rows(world.bodies, world.y)[:, :13] if with_states else None
+        answer = EntitiesAnswer(response, list(world.bodies.names), pattern, frames,
+                                self._node.settings.world_frame, world.time, reply)
+        return response if answer.run(perf_counter() + SLICE) else self._builds.add(answer)
 
     def _on_entities(self, request, response, reply):
-        found = self._matching(request.filters)
-        if isinstance(found, tuple):
-            response.result = result(*found)
-            return response
-        names = self._node.world.bodies.names
-        response.entities = [names[index] for index in found]
-        response.result = result(si_msg.Result.RESULT_OK)
-        return response
+        return self._answer(request, response, reply, with_states=False)
 
     def _state_message(self, index):
         world = self._node.world
@@ -162,17 +168,7 @@ class EntityServices:
         return response
 
     def _on_states(self, request, response, reply):
-        found = self._matching(request.filters)
-        if isinstance(found, tuple):
-            response.result = result(*found)     # no entity on a refusal
-            return response
-        world, names = self._node.world, self._node.world.bodies.names
-        response.entities = [names[index] for index in found]
-        response.result = result(si_msg.Result.RESULT_OK)
-        # The snapshot: every frame at once, now; the messages are built from it later.
-        rows = frame_rows(world.bodies, world.y)[found, :13].tolist() if found else []
-        build = StatesBuild(response, rows, self._node.settings.world_frame, world.time, reply)
-        return response if build.run(perf_counter() + SLICE) else self._builds.add(build)
+        return self._answer(request, response, reply, with_states=True)
 
     def _on_set_state(self, request, response, reply):
         Result, node = si_msg.Result, self._node
@@ -208,16 +204,20 @@ class EntityServices:
         return response
 
 
-class StatesBuild:
-    """The EntityState messages of one GetEntitiesStates answer, built from a snapshot.
+class EntitiesAnswer:
+    """One GetEntities or GetEntitiesStates answer, worked out from a snapshot, in slices.
 
     Parameters
     ----------
-    response : GetEntitiesStates.Response
-        Filled (``states``) and sent through ``reply`` when every message is built.
-    rows : list of list of float
-        Per entity, its body frame's origin (3), orientation (4, x, y, z, w), origin velocity
-        (3) and angular velocity (3), world axes, at the call.
+    response : GetEntities.Response or GetEntitiesStates.Response
+        Filled (``entities``, ``states``, ``result``) and sent through ``reply`` when done.
+    names : list of str
+        Every entity's name, in scene order, at the call.
+    pattern : compiled RE2 filter or None
+        Names it finds a match in are kept; None keeps every name.
+    frames : (N, 13) float or None
+        Per body, its frame's origin (3), orientation (4, x, y, z, w), origin velocity (3)
+        and angular velocity (3), world axes, at the call; None: no states asked.
     frame_id : str
         The world frame's name.
     time : float
@@ -226,32 +226,60 @@ class StatesBuild:
         Sends the answer when it is built over several slices.
     """
 
-    def __init__(self, response, rows, frame_id, time, reply):
-        self._response, self._rows, self._reply = response, rows, reply
-        self._frame_id, self._stamp = frame_id, conversions.to_time(time)
+    # Names matched or messages built between two looks at the clock.
+    CHUNK = 128
+
+    def __init__(self, response, names, pattern, frames, frame_id, time, reply):
+        self._response, self._names, self._pattern, self._reply = response, names, pattern, reply
+        self._frames, self._frame_id, self._stamp = frames, frame_id, conversions.to_time(time)
+        self._found = [] if pattern is not None else list(range(len(names)))
+        self._looked = 0 if pattern is not None else len(names)
+        self._rows = None
         self._states = []
 
     def run(self, until):
-        """Build messages until ``perf_counter()`` passes ``until``; True when all are built."""
-        states, rows = self._states, self._rows
-        start = len(states)
-        while len(states) < len(rows):
-            built = len(states) - start
-            if built and built % 64 == 0 and perf_counter() > until:
+        """Work until ``perf_counter()`` passes ``until``; True when the answer is complete."""
+        names, search = self._names, self._pattern and self._pattern.search
+        while self._looked < len(names):
+            end = self._looked + self.CHUNK
+            self._found += [index for index in range(self._looked, min(end, len(names)))
+                            if search(names[index])]
+            self._looked = end
+            if perf_counter() > until:
                 return False
-            row = rows[len(states)]
-            state = si_msg.EntityState()
-            state.header.frame_id = self._frame_id
-            state.header.stamp = self._stamp
-            conversions.fill_pose(state.pose, row[0:3], row[3:7])
-            conversions.fill_twist(state.twist, row[7:10], row[10:13])
-            states.append(state)
+        if self._frames is not None and not self._build_states(until):
+            return False
+        self._response.entities = [names[index] for index in self._found]
+        self._response.result = result(si_msg.Result.RESULT_OK)
+        return True
+
+    def _build_states(self, until):
+        """Build the states' messages until ``until``; True when all are built."""
+        if self._rows is None:
+            self._rows = self._frames[self._found].tolist()
+        states, rows = self._states, self._rows
+        while len(states) < len(rows):
+            for row in rows[len(states):len(states) + self.CHUNK]:
+                state = si_msg.EntityState()
+                state.header.frame_id = self._frame_id
+                state.header.stamp = self._stamp
+                conversions.fill_pose(state.pose, row[0:3], row[3:7])
+                conversions.fill_twist(state.twist, row[7:10], row[10:13])
+                states.append(state)
+            if len(states) < len(rows) and perf_counter() > until:
+                return False
         self._response.states = states
         return True
 
     def send(self):
-        """Send the finished answer."""
-        self._reply(self._response)
+        """Send the answer from a thread of its own.
+
+        rclpy converts a message to C field by field through Python (20 000 states: seconds
+        on a loaded machine), so on the executor's thread a big answer would hold control
+        up for that long; from another thread the interpreter switches between the two.
+        """
+        Thread(target=self._reply, args=(self._response,), name='entities answer',
+               daemon=True).start()
 
 
 class SlicedBuilds:
@@ -268,7 +296,7 @@ class SlicedBuilds:
         self._timer.cancel()
 
     def add(self, build):
-        """Queue ``build`` (a started :class:`StatesBuild`); LATER, its callback's answer."""
+        """Queue ``build`` (a started :class:`EntitiesAnswer`); LATER, its callback's answer."""
         self._queue.append(build)
         self._timer.reset()
         return deferred.LATER

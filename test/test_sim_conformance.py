@@ -64,7 +64,7 @@ def entities(sim, pattern):
 
 
 def assert_alive(sim):
-    """The node's process runs and answers a call."""
+    """Assert the node's process runs and answers a call."""
     assert sim.process.poll() is None, 'the node exited'
     answer = sim.call('get_simulation_state')
     assert answer.result.result == OK
@@ -142,7 +142,7 @@ def test_steps_while_playing_fail_as_the_definitions_say(stopped):
 
 
 def test_a_default_client_that_works_on_each_feedback_receives_every_step(stopped):
-    """rclpy's default client: a feedback queue of 10, the result asked for at acceptance.
+    """A client with rclpy's defaults: feedback queue 10, result asked for at acceptance.
 
     The client spends 2 ms on each message (a user's logging or control), as clients do.
     """
@@ -164,7 +164,7 @@ def test_a_default_client_that_works_on_each_feedback_receives_every_step(stoppe
 
 @pytest.fixture(scope='module')
 def many(tmp_path_factory):
-    """A node on MANY bodies at rest, body i at (i, -2 i, 3 + i / 1000) cm, no effects."""
+    """Start a node on MANY bodies at rest, body i at (i, -2 i, 300 + i / 1000) cm."""
     folder = tmp_path_factory.mktemp('many')
     lines = ['bodies:'] + [
         f'  - {{name: g{i}, shape: {{type: sphere, radius: 0.001}}, mass: 1.0, '
@@ -194,3 +194,15 @@ def test_all_states_of_many_bodies_are_each_bodys_own(many):
     assert [s.pose.position.x for s in sevens.states] == pytest.approx(
         [i * 0.01 for i in wanted], abs=1e-12)
     assert_alive(many)
+
+
+def test_without_re2_a_name_filter_is_refused_as_unsupported(monkeypatch):
+    """A ROS install without google-re2 lists every entity and refuses to match names."""
+    from types import SimpleNamespace
+    from rigid_sim import entity_services
+    monkeypatch.setattr(entity_services, 're2', None)
+    services = SimpleNamespace()
+    filters = EntityFilters(filter='box')
+    refusal = entity_services.EntityServices._pattern(services, filters)
+    assert refusal[0] == Result.RESULT_FEATURE_UNSUPPORTED and 'google-re2' in refusal[1]
+    assert entity_services.EntityServices._pattern(services, EntityFilters()) is None
