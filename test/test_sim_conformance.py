@@ -59,7 +59,7 @@ def stopped(sim):
 
 
 def entities(sim, pattern):
-    """The GetEntities answer for name filter ``pattern``."""
+    """Return the GetEntities answer for name filter ``pattern``."""
     return sim.call('get_entities', filters=EntityFilters(filter=pattern))
 
 
@@ -79,7 +79,7 @@ def test_filter_speaks_posix_character_classes(stopped):
 
 
 def test_perl_only_syntax_is_refused_with_a_reason(stopped):
-    """``\\d`` is Perl's, not POSIX extended: refused, not read as something else."""
+    """Perl's digit class is no POSIX extended syntax: refused, not read as something else."""
     answer = entities(stopped, r'crate\d').result
     assert answer.result == Result.RESULT_OPERATION_FAILED
     assert 'POSIX' in answer.error_message
