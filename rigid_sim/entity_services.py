@@ -234,7 +234,6 @@ class EntitiesAnswer:
         self._frames, self._frame_id, self._stamp = frames, frame_id, conversions.to_time(time)
         self._found = [] if pattern is not None else list(range(len(names)))
         self._looked = 0 if pattern is not None else len(names)
-        self._rows = None
         self._states = []
 
     def run(self, until):
@@ -255,18 +254,16 @@ class EntitiesAnswer:
 
     def _build_states(self, until):
         """Build the states' messages until ``until``; True when all are built."""
-        if self._rows is None:
-            self._rows = self._frames[self._found].tolist()
-        states, rows = self._states, self._rows
-        while len(states) < len(rows):
-            for row in rows[len(states):len(states) + self.CHUNK]:
+        states, found = self._states, self._found
+        while len(states) < len(found):
+            for row in self._frames[found[len(states):len(states) + self.CHUNK]].tolist():
                 state = si_msg.EntityState()
                 state.header.frame_id = self._frame_id
                 state.header.stamp = self._stamp
                 conversions.fill_pose(state.pose, row[0:3], row[3:7])
                 conversions.fill_twist(state.twist, row[7:10], row[10:13])
                 states.append(state)
-            if len(states) < len(rows) and perf_counter() > until:
+            if len(states) < len(found) and perf_counter() > until:
                 return False
         self._response.states = states
         return True
