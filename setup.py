@@ -49,9 +49,10 @@ setup(
     ] + tree_files('config') + tree_files('interfaces'),
     python_requires='>=3.10',
     # rtree: trimesh's ray queries, used by the sampling inertia method.
-    # yourdfpy reads URDF for SpawnEntity, lxml (its parser) SDFormat.
+    # yourdfpy reads URDF for SpawnEntity, lxml (its parser) SDFormat. google-re2: the
+    # entity services' name filter, a POSIX ERE matched in linear time.
     install_requires=['setuptools', 'numpy', 'scipy', 'numba', 'PyYAML', 'trimesh', 'rtree',
-                      'yourdfpy', 'lxml'],
+                      'yourdfpy', 'lxml', 'google-re2'],
     extras_require={
         'ros': ROS_WHEELS,
         # colcon: test_install.py builds the package as a ROS install would; the

@@ -8,17 +8,69 @@ velocity, in ``world_frame`` (``header.frame_id`` empty or ``world_frame``) or, 
 SetEntityState and a spawn's ``initial_pose``, relative to another entity's frame. A state
 is set at once, between two ticks, so the answer means it is applied. Spawns and deletes are
 in :mod:`rigid_sim.spawning`.
+
+The name filter is a POSIX extended regular expression, as the standard says, matched by RE2:
+its work is linear in the name's length whatever the pattern (no backtracking, so no pattern
+can hold the executor), its memory is capped, and it speaks the POSIX classes
+(``[[:alpha:]]``). GetEntities and GetEntitiesStates take one snapshot at the call (the
+names, and every body frame in one vectorised pass), then match the names and build the
+states' messages in slices of executor time and send a big answer from a thread, so a big
+scene's answer never holds control up.
 """
-import re
+from collections import deque
+from threading import Thread
+from time import perf_counter
+
+from rclpy.clock import Clock, ClockType
+try:
+    import re2
+except ImportError:   # a ROS install has no rosdep key for it: filters are refused, not run
+    re2 = None
 
 from rigid_sim import conversions, deferred
 from rigid_sim.core import body_state
+from rigid_sim.core.state import frame_rows
 from rigid_sim.core.text import clipped, shown
+from rigid_sim.tick_loop import SLICE
 
 from simulation_interfaces import msg as si_msg, srv as si_srv
 
 # Characters of an answer's error_message: its outside text is quoted cut already.
 MESSAGE_LIMIT = 1000
+# Characters of a name filter: a longer one is refused, never cut. A name pattern needs far
+# fewer; this bounds the compile (RE2's is linear in the pattern) and the nesting.
+FILTER_LIMIT = 1000
+NO_RE2 = ('name filters need RE2 (linear-time POSIX regular expressions): pip install '
+          'google-re2; an empty filter lists every entity')
+# Bytes RE2 may use for one compiled filter (its default is 8 MiB): a bigger program is
+# refused at compile, as RE2 refuses repetitions above 1000 in all (a{1000}{1000}).
+FILTER_MEMORY = 1 << 20
+
+
+def _filter_options():
+    """RE2 options for POSIX extended syntax, leftmost-longest, ``^``/``$`` at the name's ends."""
+    options = re2.Options()
+    options.posix_syntax = True     # no Perl classes (\d, \b) or (?i): POSIX ERE
+    options.longest_match = True
+    options.one_line = True
+    options.max_mem = FILTER_MEMORY
+    options.log_errors = False      # the refusal says it; nothing on the node's stderr
+    return options
+
+
+def compiled_filter(text):
+    """Return the compiled name filter ``text`` (a POSIX ERE), or ValueError saying why not."""
+    if len(text) > FILTER_LIMIT:
+        raise ValueError(f'filter of {len(text)} characters, above the limit of '
+                         f'{FILTER_LIMIT}')
+    try:
+        return re2.compile(text, _filter_options())
+    except re2.error as error:
+        reason = error.args[0] if error.args else error
+        if isinstance(reason, bytes):
+            reason = reason.decode('utf-8', 'replace')
+        raise ValueError(f'filter {shown(text)} is not a POSIX extended regular expression '
+                         f'RE2 accepts: {clipped(str(reason), 200)}') from None
 
 
 def result(code, message=''):
@@ -57,30 +109,42 @@ class EntityServices:
                 (srv.SetEntityState, 'set_entity_state', self._on_set_state)):
             deferred.create_service(node, kind, f'~/{name}', callback)
 
+        self._builds = SlicedBuilds(node)
+
     def _index(self, name):
         """Scene index of entity ``name``, or None."""
         names = self._node.world.bodies.names
         return names.index(name) if name in names else None
 
-    def _matching(self, filters):
-        """Names passing ``filters`` (a name regex), or a (code, reason) refusal."""
+    def _pattern(self, filters):
+        """Return the compiled name filter of ``filters`` (None: all), or a (code, reason)."""
         Result = si_msg.Result
         if filters.categories or filters.tags.tags or filters.bounds.type:
             return Result.RESULT_FEATURE_UNSUPPORTED, 'only the name filter is supported'
+        if not filters.filter:
+            return None
+        if re2 is None:
+            return Result.RESULT_FEATURE_UNSUPPORTED, NO_RE2
         try:
-            pattern = re.compile(filters.filter)
-        except re.error as error:
-            return Result.RESULT_OPERATION_FAILED, f'filter {shown(filters.filter)}: {error}'
-        return [name for name in self._node.world.bodies.names if pattern.search(name)]
+            return compiled_filter(filters.filter)
+        except ValueError as error:
+            return Result.RESULT_OPERATION_FAILED, str(error)
+
+    def _answer(self, request, response, reply, with_states):
+        """Start the answer of GetEntities (or GetEntitiesStates); the response or LATER."""
+        pattern = self._pattern(request.filters)
+        if isinstance(pattern, tuple):
+            response.result = result(*pattern)     # no entity on a refusal
+            return response
+        world = self._node.world
+        # The snapshot: the names and, for states, every body frame at once, now.
+        frames = frame_rows(world.bodies, world.y)[:, :13] if with_states else None
+        answer = EntitiesAnswer(response, list(world.bodies.names), pattern, frames,
+                                self._node.settings.world_frame, world.time, reply)
+        return response if answer.run(perf_counter() + SLICE) else self._builds.add(answer)
 
     def _on_entities(self, request, response, reply):
-        found = self._matching(request.filters)
-        if isinstance(found, tuple):
-            response.result = result(*found)
-            return response
-        response.entities = found
-        response.result = result(si_msg.Result.RESULT_OK)
-        return response
+        return self._answer(request, response, reply, with_states=False)
 
     def _state_message(self, index):
         world = self._node.world
@@ -104,9 +168,7 @@ class EntityServices:
         return response
 
     def _on_states(self, request, response, reply):
-        response = self._on_entities(request, response, reply)   # no entity on a refusal
-        response.states = [self._state_message(self._index(name)) for name in response.entities]
-        return response
+        return self._answer(request, response, reply, with_states=True)
 
     def _on_set_state(self, request, response, reply):
         Result, node = si_msg.Result, self._node
@@ -140,3 +202,107 @@ class EntityServices:
         self._changed()
         response.result = result(Result.RESULT_OK)
         return response
+
+
+class EntitiesAnswer:
+    """One GetEntities or GetEntitiesStates answer, worked out from a snapshot, in slices.
+
+    Parameters
+    ----------
+    response : GetEntities.Response or GetEntitiesStates.Response
+        Filled (``entities``, ``states``, ``result``) and sent through ``reply`` when done.
+    names : list of str
+        Every entity's name, in scene order, at the call.
+    pattern : compiled RE2 filter or None
+        Names it finds a match in are kept; None keeps every name.
+    frames : (N, 13) float or None
+        Per body, its frame's origin (3), orientation (4, x, y, z, w), origin velocity (3)
+        and angular velocity (3), world axes, at the call; None: no states asked.
+    frame_id : str
+        The world frame's name.
+    time : float
+        Simulated time of the snapshot, s.
+    reply : deferred.Reply
+        Sends the answer when it is built over several slices.
+    """
+
+    # Names matched or messages built between two looks at the clock.
+    CHUNK = 128
+
+    def __init__(self, response, names, pattern, frames, frame_id, time, reply):
+        self._response, self._names, self._pattern, self._reply = response, names, pattern, reply
+        self._frames, self._frame_id, self._stamp = frames, frame_id, conversions.to_time(time)
+        self._found = [] if pattern is not None else list(range(len(names)))
+        self._looked = 0 if pattern is not None else len(names)
+        self._states = []
+
+    def run(self, until):
+        """Work until ``perf_counter()`` passes ``until``; True when the answer is complete."""
+        names, search = self._names, self._pattern and self._pattern.search
+        while self._looked < len(names):
+            end = self._looked + self.CHUNK
+            self._found += [index for index in range(self._looked, min(end, len(names)))
+                            if search(names[index])]
+            self._looked = end
+            if perf_counter() > until:
+                return False
+        if self._frames is not None and not self._build_states(until):
+            return False
+        self._response.entities = [names[index] for index in self._found]
+        self._response.result = result(si_msg.Result.RESULT_OK)
+        return True
+
+    def _build_states(self, until):
+        """Build the states' messages until ``until``; True when all are built."""
+        states, found = self._states, self._found
+        while len(states) < len(found):
+            for row in self._frames[found[len(states):len(states) + self.CHUNK]].tolist():
+                state = si_msg.EntityState()
+                state.header.frame_id = self._frame_id
+                state.header.stamp = self._stamp
+                conversions.fill_pose(state.pose, row[0:3], row[3:7])
+                conversions.fill_twist(state.twist, row[7:10], row[10:13])
+                states.append(state)
+            if len(states) < len(found) and perf_counter() > until:
+                return False
+        self._response.states = states
+        return True
+
+    def send(self):
+        """Send the answer from a thread of its own.
+
+        rclpy converts a message to C field by field through Python (20 000 states: seconds
+        on a loaded machine), so on the executor's thread a big answer would hold control
+        up for that long; from another thread the interpreter switches between the two.
+        """
+        Thread(target=self._reply, args=(self._response,), name='entities answer',
+               daemon=True).start()
+
+
+class SlicedBuilds:
+    """Runs answers too big for one slice, a ``SLICE`` of executor time per round, in order.
+
+    Between two slices the executor answers everything else (control, parameters, signals),
+    as between the tick loop's slices.
+    """
+
+    def __init__(self, node):
+        self._queue = deque()
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = node.create_timer(0.0, self._on_timer, clock=steady)
+        self._timer.cancel()
+
+    def add(self, build):
+        """Queue ``build`` (a started :class:`EntitiesAnswer`); LATER, its callback's answer."""
+        self._queue.append(build)
+        self._timer.reset()
+        return deferred.LATER
+
+    def _on_timer(self):
+        until = perf_counter() + SLICE
+        while self._queue and perf_counter() < until:
+            if not self._queue[0].run(until):
+                return
+            self._queue.popleft().send()
+        if not self._queue:
+            self._timer.cancel()

@@ -8,7 +8,7 @@ simulation's state, stepping, resets and the feature list, :mod:`rigid_sim.entit
 the entities' states and :mod:`rigid_sim.spawning` spawns and deletes. The package has no
 wheel: where it is missing (a venv without ``rigid_sim_build_interfaces``) the node says
 once what it does not serve and how to add it, runs without them, and loads none of their
-code, so the run command starts no slower.
+code.
 """
 import importlib.util
 

@@ -5,10 +5,23 @@
 States: playing (not paused), paused, and stopped, which is paused at the initial state:
 the node starts stopped when it starts paused, setting STOPPED pauses and resets everything
 (ResetSimulation's SCOPE_ALL), and so does that reset while paused; a step, a set state, a
-spawn or a delete leaves it. A step while playing is refused with
-RESULT_INCORRECT_STATE. A step is a tick of ``time_step`` (``substeps`` integrator steps).
+spawn or a delete leaves it. A step while playing is refused with RESULT_OPERATION_FAILED,
+as StepSimulation.srv and SimulateSteps.action say. A step is a tick of ``time_step``
+(``substeps`` integrator steps).
+
+SimulateSteps' feedback reaches a client made with rclpy's defaults, whose feedback queue
+keeps the latest 10 messages and whose goal handle drops any feedback taken after the
+result. So the action waits (bounded) until every action client the graph shows has its
+feedback subscription discovered before the first step (a message written before that is
+never delivered), runs at most one step per ``FEEDBACK_PERIOD`` (a client then has ten
+periods to take its queue before one is overwritten) and sends the result ``RESULT_HOLD``
+after the last feedback. These are waits on a timer, never sleeps: the executor answers
+everything else meanwhile. StepSimulation has none of them.
 """
+from time import monotonic
+
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.clock import Clock, ClockType
 from rclpy.task import Future
 from simulation_interfaces import msg as si_msg, srv as si_srv
 from simulation_interfaces.action import SimulateSteps
@@ -22,6 +35,16 @@ Result = si_msg.Result
 # Steps one call may ask for: 1e7 ticks run for hours of wall time at most, and a bigger
 # number is a mistake (a uint64 holds 1.8e19), refused rather than clamped.
 MAX_STEPS = 10_000_000
+# s of wall time: at least this between two steps of SimulateSteps (at most 200 steps/s), so
+# a client's default feedback queue of 10 overflows only if it takes none for 50 ms.
+FEEDBACK_PERIOD = 0.005
+# s of wall time between the last feedback and the result: a client busy when both arrive
+# takes the result first and drops the feedback still queued.
+RESULT_HOLD = 0.25
+# s: the longest wait for the action clients' feedback subscriptions to be discovered.
+DISCOVERY_WAIT = 2.0
+# The ResetSimulation scope bits the standard defines (TIME, STATE, SPAWNED; ALL is 255).
+DEFINED_SCOPES = 0b111
 
 
 def features():
@@ -63,6 +86,9 @@ class SimulationInterfaces:
         self.action = ActionServer(node, SimulateSteps, '~/simulate_steps', self._execute,
                                    goal_callback=lambda goal: GoalResponse.ACCEPT,
                                    cancel_callback=lambda goal: CancelResponse.ACCEPT)
+        self._waits = WallWaits(node)
+        action = f'{node.get_fully_qualified_name()}/simulate_steps/_action'
+        self._feedback_topic, self._goal_service = f'{action}/feedback', f'{action}/send_goal'
 
     def _left_start(self):
         self.stopped = False
@@ -113,7 +139,7 @@ class SimulationInterfaces:
     def _refuse_steps(self, steps):
         """Why ``steps`` cannot run now ('' if they can), as (code, text)."""
         if not self._node.paused:
-            return (Result.RESULT_INCORRECT_STATE, 'steps run only while paused: set '
+            return (Result.RESULT_OPERATION_FAILED, 'steps run only while paused: set '
                     'STATE_PAUSED with ~/set_simulation_state (or ~/pause) first')
         if steps > MAX_STEPS:
             return Result.RESULT_OPERATION_FAILED, f'{steps} steps, above {MAX_STEPS} a call'
@@ -142,7 +168,11 @@ class SimulationInterfaces:
             goal.abort()
             return answer
         self.stopped = self.stopped and steps == 0
+        await self._feedback_discovered()
+        started = monotonic()
         for completed in range(1, steps + 1):
+            await self._waits.after(started + FEEDBACK_PERIOD - monotonic())
+            started = monotonic()
             if goal.is_cancel_requested:
                 goal.canceled()
                 answer.result = result(Result.RESULT_OK, f'cancelled after {completed - 1}')
@@ -157,11 +187,32 @@ class SimulationInterfaces:
                 return answer
             goal.publish_feedback(SimulateSteps.Feedback(completed_steps=completed,
                                                          remaining_steps=steps - completed))
+        await self._waits.after(RESULT_HOLD)
         goal.succeed()
         answer.result = result(Result.RESULT_OK)
         return answer
 
+    async def _feedback_discovered(self):
+        """Wait until each action client in the graph has its feedback subscription, or a while.
+
+        A client's goal service client and feedback subscription are discovered separately;
+        feedback published before the second is lost to it.
+        """
+        node, deadline = self._node, monotonic() + DISCOVERY_WAIT
+        while (node.count_subscribers(self._feedback_topic)
+               < node.count_clients(self._goal_service) and monotonic() < deadline):
+            await self._waits.after(FEEDBACK_PERIOD)
+
     def _on_reset(self, request, response, reply):
+        r = si_srv.ResetSimulation.Request
+        if request.scope != r.SCOPE_ALL and request.scope & ~DEFINED_SCOPES:
+            response.result = result(
+                Result.RESULT_FEATURE_UNSUPPORTED,
+                f'scope {request.scope} has bits the standard does not define '
+                f'({request.scope & ~DEFINED_SCOPES:#x}): give SCOPE_DEFAULT, SCOPE_ALL or '
+                'a sum of SCOPE_TIME (1), SCOPE_STATE (2), SCOPE_SPAWNED (4); nothing was reset')
+            return response
+
         def done(refusal):
             response.result = (result(Result.RESULT_OK) if refusal is None
                                else result(Result.RESULT_OPERATION_FAILED, str(refusal)))
@@ -191,6 +242,37 @@ class SimulationInterfaces:
         # being prepared is removed too, and a reset never works on a scene about to go.
         self.spawns.reset_scene(scope == r.SCOPE_ALL, bool(scope & r.SCOPE_SPAWNED), then)
         return deferred.LATER
+
+
+class WallWaits:
+    """Futures done after a wall-clock delay, from one steady timer: waits, never sleeps."""
+
+    def __init__(self, node):
+        self._waiting = []    # (monotonic deadline, Future)
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = node.create_timer(FEEDBACK_PERIOD / 5, self._on_timer, clock=steady)
+        self._timer.cancel()
+
+    def after(self, seconds):
+        """Return a Future done ``seconds`` from now (at once if ``seconds`` <= 0)."""
+        future = Future()
+        if seconds <= 0.0:
+            future.set_result(None)
+            return future
+        self._waiting.append((monotonic() + seconds, future))
+        if self._timer.is_canceled():
+            self._timer.reset()
+        return future
+
+    def _on_timer(self):
+        now = monotonic()
+        due = [future for deadline, future in self._waiting if deadline <= now]
+        self._waiting = [(deadline, future) for deadline, future in self._waiting
+                         if deadline > now]
+        if not self._waiting:
+            self._timer.cancel()
+        for future in due:
+            future.set_result(None)
 
 
 def reset_parts(node, state, time):

@@ -93,12 +93,18 @@ def test_ci_runs_exactly_the_readme_test_command():
     assert 0 < test_command.index('rigid_sim_build_interfaces') < test_command.index('pytest')
 
 
-def test_readme_run_command_builds_no_interfaces_and_says_how_to_add_them():
-    """The run command stays as fast as before; the README gives the one command to add."""
+def test_readme_run_command_builds_the_standard_interfaces_before_the_node():
+    """The run command serves simulation_interfaces: it builds the types, then starts the node.
+
+    The build is its own step, before the node (never in its start); the README still gives
+    the command that adds the types to a venv made without them.
+    """
     readme = (ROOT / 'README.md').read_text().splitlines()
     run_command, = (line for line in readme if line.startswith('python3 -m venv')
                     and 'rigid_sim_node' in line)
-    assert "'.[ros]'" in run_command and 'interfaces' not in run_command
+    assert "'.[ros,interfaces]'" in run_command
+    assert 0 < run_command.index('rigid_sim_build_interfaces') < run_command.index(
+        'rigid_sim_node')
     add = ".venv/bin/pip install -e '.[interfaces]' && .venv/bin/rigid_sim_build_interfaces"
     assert add in readme
 

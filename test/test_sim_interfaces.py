@@ -118,7 +118,7 @@ def test_stopped_paused_playing_and_steps_only_while_paused(stopped):
     assert sim.call('set_simulation_state', state=s(state=s.STATE_PLAYING)).result.result == OK
     assert simulation_state(sim) == s.STATE_PLAYING
     refused = sim.call('step_simulation', steps=1).result
-    assert refused.result == Result.RESULT_INCORRECT_STATE and 'paused' in refused.error_message
+    assert refused.result == Result.RESULT_OPERATION_FAILED and 'paused' in refused.error_message
     assert sim.call('set_simulation_state', state=s(state=s.STATE_STOPPED)).result.result == OK
     assert simulation_state(sim) == s.STATE_STOPPED
     position, _, velocity, _, time = state_of(sim, 'box')
@@ -286,14 +286,14 @@ def _goal(steps):
     return SimulateSteps.Goal(steps=steps)
 
 
-def test_simulate_steps_while_playing_is_aborted_as_incorrect_state(stopped):
+def test_simulate_steps_while_playing_is_aborted_as_operation_failed(stopped):
     sim, s = stopped, SimulationState
     assert sim.call('set_simulation_state', state=s(state=s.STATE_PLAYING)).result.result == OK
     goal = sim.action.send_goal_async(_goal(3))
     sim.until(goal.done, 'goal answered')
     outcome = goal.result().get_result_async()
     sim.until(outcome.done, 'result')
-    assert outcome.result().result.result.result == Result.RESULT_INCORRECT_STATE
+    assert outcome.result().result.result.result == Result.RESULT_OPERATION_FAILED
 
 
 def test_reset_scopes(stopped):
