@@ -15,9 +15,11 @@ of the executor. While paused the loop then stands still (there is nothing to ca
 nothing new to publish); ``~/step`` still advances it.
 
 Control apart from the work: one timer callback ticks for at most ``SLICE`` seconds of wall
-time (and at least one tick), then returns to the executor, which answers services,
-parameter calls and signals before the next slice. A catch-up, the ticks of a multi-tick
-:class:`StepJob` and ticking at rate 0 all run in such slices.
+time, then returns to the executor, which answers services, parameter calls and signals
+before the next slice. A catch-up, the ticks of a multi-tick :class:`StepJob` and ticking
+at rate 0 all run in such slices, and so does a single tick longer than a slice (many
+``substeps``, many bodies): the tick is told the slice's end and stops after the world
+step that passes it, to go on in the next callback; it counts as run once it is done.
 """
 from collections import deque
 import math
@@ -56,7 +58,9 @@ class TickLoop:
     node : rclpy.node.Node
         Owns the timers.
     tick : callable
-        ``tick(advance)``: one tick of the simulation; ``advance`` False while paused.
+        ``tick(advance, until)``: one tick of the simulation, or the rest of the one in
+        progress; ``advance`` False while paused; ``until`` a ``perf_counter`` time at
+        which to stop early. Returns False when it stopped early (the tick is not done).
     rate : float
         Ticks per second of wall time, Hz; 0 ticks as fast as the CPU allows.
     """
@@ -139,9 +143,12 @@ class TickLoop:
         dropped, self.dropped = self.dropped, 0
         return dropped
 
-    def _run(self, advance):
-        self._tick(advance)
+    def _run(self, advance, until):
+        """Run a tick, or the rest of the one in progress, until ``until``; whether it is done."""
+        if self._tick(advance, until) is False:
+            return False
         self.last_tick = monotonic()
+        return True
 
     def _on_timer(self):
         if self.jobs:   # a step job ticks the world; the schedule starts again after it
@@ -149,9 +156,8 @@ class TickLoop:
             return
         if self.rate == 0.0:
             end = perf_counter() + SLICE
-            self._run(not self.paused)
-            while perf_counter() < end:
-                self._run(not self.paused)
+            while self._run(not self.paused, end) and perf_counter() < end:
+                pass
             return
         self._catch_up()
 
@@ -164,7 +170,8 @@ class TickLoop:
             self._origin, self._done, owed = now, 0, 1
         end = perf_counter() + SLICE
         for ran in range(1, owed + 1):   # the rest, if any, at the next wake-up
-            self._run(not self.paused)
+            if not self._run(not self.paused, end):
+                return
             self._done += 1
             if perf_counter() > end and ran < owed:
                 return
@@ -174,7 +181,8 @@ class TickLoop:
         while self.jobs and perf_counter() <= end:
             job = self.jobs[0]
             while job.left > 0 and perf_counter() <= end:
-                self._run(True)
+                if not self._run(True, end):
+                    return   # the tick goes on in the next round
                 job.left -= 1
                 job.ran += 1
             if job.left == 0:

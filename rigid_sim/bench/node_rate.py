@@ -84,10 +84,11 @@ class TimedNode(RigidSimNode):
         self.tick_seconds = []
         super().__init__(**kwargs)   # its tick loop calls self._tick: the method below
 
-    def _tick(self, advance):
+    def _tick(self, advance, until=None):
         started = time.perf_counter()
-        super()._tick(advance)
+        done = super()._tick(advance, until)
         self.tick_seconds.append(time.perf_counter() - started)
+        return done
 
 
 def scene_text(n, wrench_input=None):
