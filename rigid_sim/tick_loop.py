@@ -42,12 +42,13 @@ class StepJob:
     def __init__(self, ticks, done):
         self.left = ticks
         self.ran = 0
+        self.why = ''   # what ends it early, once something does
         self._done = done
 
     def finish(self, why=''):
         """End the job: report the ticks it ran."""
         self.left = 0
-        self._done(self.ran, why)
+        self._done(self.ran, why or self.why)
 
 
 class TickLoop:
@@ -73,6 +74,7 @@ class TickLoop:
         self.dropped = 0        # ticks given up behind wall time since the last report
         self.last_tick = monotonic()   # wall time of the latest tick, for /diagnostics
         self.jobs = deque()     # StepJobs, run in order, each to its end
+        self.partial = False    # a tick stopped at a slice's end, to go on at the next call
         self._origin = 0.0      # wall time (monotonic) at which tick 0 was due
         self._done = 0          # ticks run since the origin
         # STEADY_TIME: never sim time, which this loop makes.
@@ -107,7 +109,7 @@ class TickLoop:
         self.paused = paused
         if self.stopped:
             return
-        if self.rate == 0.0 and paused:
+        if self.rate == 0.0 and paused and not self.partial:   # else once the tick is done
             self.timer.cancel()
         elif self.timer.is_canceled() and not paused:
             self.timer.reset()
@@ -127,10 +129,21 @@ class TickLoop:
         self._job_timer.reset()
 
     def end_jobs(self, why):
-        """End the running job after its current tick, and every queued one, saying ``why``."""
+        """End the running job after its current tick, and every queued one, saying ``why``.
+
+        A tick stopped at a slice's end is finished first (the world is left at the end of
+        a tick, never within one): the running job then ends at its next round.
+        """
+        running = None
+        if self.partial and self.jobs:
+            running = self.jobs.popleft()
+            running.left, running.why = 1, why
         while self.jobs:
             self.jobs.popleft().finish(why)
-        self._job_timer.cancel()
+        if running is None:
+            self._job_timer.cancel()
+        else:
+            self.jobs.append(running)
 
     def since_last_tick(self):
         """Seconds of wall time since the latest tick; None where none is due on the clock."""
@@ -145,10 +158,10 @@ class TickLoop:
 
     def _run(self, advance, until):
         """Run a tick, or the rest of the one in progress, until ``until``; whether it is done."""
-        if self._tick(advance, until) is False:
-            return False
-        self.last_tick = monotonic()
-        return True
+        self.partial = self._tick(advance, until) is False
+        if not self.partial:
+            self.last_tick = monotonic()
+        return not self.partial
 
     def _on_timer(self):
         if self.jobs:   # a step job ticks the world; the schedule starts again after it
@@ -158,6 +171,8 @@ class TickLoop:
             end = perf_counter() + SLICE
             while self._run(not self.paused, end) and perf_counter() < end:
                 pass
+            if self.paused and not self.partial:   # paused while a tick was under way
+                self.timer.cancel()
             return
         self._catch_up()
 
@@ -186,6 +201,6 @@ class TickLoop:
                 job.left -= 1
                 job.ran += 1
             if job.left == 0:
-                self.jobs.popleft().finish()
+                self.jobs.popleft().finish(job.why)
         if not self.jobs:
             self._job_timer.cancel()

@@ -143,8 +143,8 @@ class GatedSolver(goal_input.GoalSolver):
         return super().solve(goal, path, **options)
 
 
-def test_a_flood_of_goals_solves_the_latest_and_reports_the_rest_superseded(rigid_sim,
-                                                                           monkeypatch):
+def test_a_flood_of_goals_solves_the_latest_and_reports_the_rest_superseded(
+        rigid_sim, monkeypatch):
     """Twenty goals while the worker is busy: one waits at a time, only the last is solved."""
     monkeypatch.setattr(goal_input, 'WORST_FLIGHTS', 10 ** 9)   # every solve in the worker
     monkeypatch.setattr(goal_input, 'GoalSolver', GatedSolver)
