@@ -407,10 +407,14 @@ def main(args):
             results = run_configurations(chosen['configs'], args.integrators, log_dir, seconds)
             starts = run_starts(chosen['start_sizes'], log_dir)
         if chosen.get('control', True) and args.control:
-            scene = Path(log_dir, 'boxes_1000.yaml')
-            scene.write_text(scene_text(1000))
+            scenes = {}
+            for n in (1000, 5000, 20_000):
+                scenes[f'boxes_{n}'] = str(Path(log_dir, f'boxes_{n}.yaml'))
+                Path(scenes[f'boxes_{n}']).write_text(scene_text(n))
+            scenes['fast_rod'] = str(Path(log_dir, 'fast_rod.yaml'))
+            Path(scenes['fast_rod']).write_text(control_latency.FAST_ROD)
             write(args.out, CONTROL_SECTION, control_report(
-                control_latency.measure(str(scene), log_dir)))
+                control_latency.measure(scenes, log_dir)))
     if not args.control_only:
         write(args.out, SECTION, report(results, seconds, starts))
     return results
