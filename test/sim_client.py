@@ -24,7 +24,7 @@ import processes
 from ros_tools import TIMEOUT, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
-START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
+START_TIMEOUT = 600.0  # s: imports, a cold compile, discovery, on a loaded 2-core machine
 SERVICES = {'get_simulator_features': srv.GetSimulatorFeatures,
             'get_simulation_state': srv.GetSimulationState,
             'set_simulation_state': srv.SetSimulationState,

@@ -53,7 +53,7 @@ with event.install_listener('numba:compile', compilations):
 print(compilations.count, compile_cache.STATE.healed, compile_cache.caching_note())
 '''
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
-EXIT_TIMEOUT = 30.0   # s: a liveness bound only
+EXIT_TIMEOUT = 120.0  # s: a liveness bound only
 
 
 def cached_files(root):

@@ -31,7 +31,7 @@ from ros_tools import TIMEOUT, record, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 NAMESPACE = f'/t{os.getpid()}'
-START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
+START_TIMEOUT = 600.0  # s: imports, a cold compile, discovery, on a loaded 2-core machine
 
 
 def start_node(*ros_arguments, cwd):

@@ -25,8 +25,8 @@ import processes
 
 FORKS = Path(__file__).with_name('node_forks.py')
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
-START_TIMEOUT = 60.0   # s: twenty nodes discovering each other on a busy machine
-EXIT_TIMEOUT = 30.0    # s: a liveness bound, far above the exit times the benchmark shows
+START_TIMEOUT = 600.0  # s: twenty nodes importing and discovering on a loaded 2-core machine
+EXIT_TIMEOUT = 120.0   # s: a liveness bound, far above the exit times the benchmark shows
 RATES = (['-p', 'rate:=1000.0'], ['-p', 'rate:=100.0'], ['-p', 'rate:=0.0'],
          ['-p', 'rate:=0.001', '-p', 'time_step:=0.01'], ['-p', 'start_paused:=true'])
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
