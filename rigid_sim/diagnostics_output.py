@@ -76,7 +76,7 @@ class DiagnosticsOutput:
 
 
 def capped_work(safeguards, failed_ticks, level, summary):
-    """The window's ``level`` and ``summary``, raised where a cap on work held a step back.
+    """Return the window's ``level`` and ``summary``, raised where a work cap held a step.
 
     Error control held to its cap on work (``ERROR_WORK``) keeps an estimate above the
     tolerance, maybe by orders of magnitude: a WARN with the numbers, not "running". A step

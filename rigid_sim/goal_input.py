@@ -19,9 +19,10 @@ step); the rest run in a worker thread on a snapshot of the world taken at the t
 that a goal never holds up /clock or control. The world has moved on by the time the answer
 comes, so it is re-anchored at the tick that applies it: solved again from the world as it
 is then, from the worker's solution and Jacobian only (no restarts), which takes a few
-one-copy flights where the first solve took many; where even that flight is above
-``INLINE_WORK``, or the re-anchor does not converge, the goal goes back to the worker from
-the world as it is then, at most ``CHASES`` times. Without a wall clock (rate 0, or a loop
+one-copy flights where the first solve took many. Where that does not converge, the goal
+goes back to the worker from the world as it is then, at most ``CHASES`` times; where even
+one flight is above ``INLINE_WORK`` (a large world, a far goal), it is refused, saying so.
+Without a wall clock (rate 0, or a loop
 stopped for lockstep) every goal is solved in the tick, so a lockstep run stays repeatable
 to the bit.
 
@@ -220,16 +221,19 @@ class GoalInput:
         if isinstance(outcome, Exception):
             self._report_refusal(goal.body, outcome)
             return
-        start = (outcome.values, outcome.jacobian)
-        if self._flight_work(goal, settings) > INLINE_WORK:
-            self._chase(goal, settings, start, chases, 'its flight is too long for a tick')
+        work = self._flight_work(goal, settings)
+        if work > INLINE_WORK:   # no later tick would fly it either
+            self._report_refusal(goal.body, ValueError(
+                f'solved in the worker thread but not re-anchored: a flight of the world to '
+                f'{goal.at!r} s is {work:.0f} body-steps, more than a tick flies '
+                f'({INLINE_WORK}); a nearer goal time reaches it'))
             return
         try:   # re-anchored: from the world as it is now, near the worker's solution
             solution = self._solver_for(settings).solve(
                 goal, path=True, start=outcome.values, jacobian=outcome.jacobian,
                 restarts=False)
         except ValueError as error:   # GoalRefused is a ValueError
-            self._chase(goal, settings, start, chases, error)
+            self._chase(goal, settings, (outcome.values, outcome.jacobian), chases, error)
             return
         self._applied(solution, settings, 'worker thread, re-anchored at the tick')
 

@@ -169,7 +169,7 @@ class TickLoop:
             return
         if self.rate == 0.0:
             end = perf_counter() + SLICE
-            while self._run(not self.paused, end) and perf_counter() < end:
+            while self._run(not self.paused, end) and not self.paused and perf_counter() < end:
                 pass
             if self.paused and not self.partial:   # paused while a tick was under way
                 self.timer.cancel()
