@@ -11,7 +11,8 @@ whose kernels are not in the (fresh) cache, overload (1000 bodies at rate 1000, 
 one core can tick), a goal on the springs scene, a flood of goals (150 Hz), 1000 substeps
 a tick on 1000 bodies, dopri5 at tolerance 1e-12 on a rod spinning at 10 000 rad/s, a
 GetEntitiesStates of 20 000 bodies and a spawn of 5000 bodies. The node promises each
-answer within 100 ms and each stop, with status 0, within 1 s.
+answer within 100 ms and each stop, with status 0, within 0.5 s. The machine's load
+average over the run is given: other processes' load lengthens every number.
 """
 import os
 import signal

@@ -367,10 +367,16 @@ def report(results, seconds, starts=()):
         *goals(results)])
 
 
-def control_report(rows):
-    """Return the control-latency section: how it was measured and the table."""
+def control_report(rows, load=None):
+    """Return the control-latency section: how it was measured and the table.
+
+    ``load``: the machine's 1-minute load average at the start and the end of the run.
+    """
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]
+    if load is not None:
+        machine.append(f'- Load average (1 min) at the start and the end: {load[0]:.1f}, '
+                       f'{load[1]:.1f}')
     return '\n'.join([
         '### Control latency while the node works (promise: answers within 100 ms, a stop '
         'within 0.5 s)', *machine, f'- Command: `{bench.command_line()}`',
@@ -413,8 +419,9 @@ def main(args):
                 Path(scenes[f'boxes_{n}']).write_text(scene_text(n))
             scenes['fast_rod'] = str(Path(log_dir, 'fast_rod.yaml'))
             Path(scenes['fast_rod']).write_text(control_latency.FAST_ROD)
-            write(args.out, CONTROL_SECTION, control_report(
-                control_latency.measure(scenes, log_dir)))
+            load = os.getloadavg()[0]
+            rows = control_latency.measure(scenes, log_dir)
+            write(args.out, CONTROL_SECTION, control_report(rows, (load, os.getloadavg()[0])))
     if not args.control_only:
         write(args.out, SECTION, report(results, seconds, starts))
     return results

@@ -28,12 +28,14 @@ from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slo
                                                        to_internal, to_public)
 from rigid_sim.core.kinematics import check_substep
 
-# Internal steps one call may take at most: scipy's stepper costs about 0.1 ms a step for
-# a few bodies on this machine, so one call stays within about 20 ms.
-MAX_INTERNAL_STEPS = 200
+# Internal steps one call may take at most: scipy's stepper costs 0.2 ms a step for a few
+# bodies on this machine idle, 0.8 ms under a load of 10 (docs/performance.md, control
+# latency: 200 steps answered control in 160 ms there), so one call stays within about
+# 40 ms. The tests' tightest use (1e-10 over 0.05 s on one body) takes fewer.
+MAX_INTERNAL_STEPS = 50
 # Body-steps (internal steps times bodies) one call may take at most: the same bound where
 # the compiled right-hand side, not the stepper, is most of the cost.
-INTERNAL_WORK = 20_000
+INTERNAL_WORK = 10_000
 
 
 class StepsCapped(ArithmeticError):
