@@ -114,7 +114,7 @@ def test_dopri5_far_below_its_reach_gives_the_step_up_as_capped_in_one_attempt(w
 
 
 def test_capped_error_control_is_a_warning_with_its_numbers(rigid_sim):
-    """Euler at 1e-12 on the fast rod: capped substeps, estimate far above the tolerance."""
+    """Euler at 1e-12 on the thin rod: capped substeps, estimate far above the tolerance."""
     sim = rigid_sim(yaml=rod.ROD, integrator='euler', tolerance=1e-12, time_step=0.01)
     probe = sim.create_node('capped_probe')
     heard = record(probe, DiagnosticArray, '/diagnostics')
