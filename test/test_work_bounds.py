@@ -170,3 +170,23 @@ def test_a_flood_of_goals_solves_the_latest_and_reports_the_rest_superseded(
     assert len(solved) == 1 and values(solved[-1])['goal time [s]'] == repr(2.0 + 19 * DT)
     superseded = [s for s in user.statuses if s.message.startswith('goal superseded')]
     assert len(superseded) == flood and superseded[-1].level == DiagnosticStatus.WARN
+
+
+def test_a_springs_goal_with_a_wall_clock_is_solved_off_the_tick(rigid_sim):
+    """The packaged springs scene, a goal 2 s ahead: its worst case is above the bound.
+
+    200 steps, once few enough to be solved in the tick, where it held /clock up for
+    seconds: the tick now hands it to the worker and returns; the answer comes later.
+    """
+    sim = rigid_sim(scene='springs.yaml', time_step=DT)
+    sim.node.loop.stopped = False   # as if a wall clock ticked it
+    user = User(sim, 'bob')
+    user.goal(at=2.0)
+    sim.step(1)
+    goals = sim.node.goals
+    assert (goals.solved, goals.refused, list(goals._latest)) == (0, 0, [0])
+    spin_until(sim.executor, lambda: goals._results.qsize() == 1, TIMEOUT,
+               "the worker's outcome")
+    sim.step(1)
+    assert goals.solved + goals.refused == 1
+    assert 'worker thread' in values(user.statuses[-1]).get('solved in', 'worker thread')
