@@ -5,6 +5,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
+from rigid_sim.core.step_control import ErrorReason
 from rigid_sim.diagnostics_window import TickStats, health, refusal_values, window_values
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
@@ -67,9 +68,30 @@ class DiagnosticsOutput:
                   **refusal_values(refusals.counts, refusals.last, refusals.superseded),
                   **dict(extra)}
         period = 1.0 / settings.rate if settings.rate > 0.0 else None
-        level, summary = health(self.stats, period, dropped, since_tick)
+        level, summary = capped_work(world.diagnostics, self.stats.failed_ticks,
+                                     *health(self.stats, period, dropped, since_tick))
         if paused and level == DiagnosticStatus.OK:
             summary = 'paused'   # integration is not running; the ticks that publish are
         self._publisher.publish(conversions.diagnostics(
             f'{self._node.get_name()}: physics', world.time, level, summary, values))
         self.restart(world.time)
+
+
+def capped_work(safeguards, failed_ticks, level, summary):
+    """Return the window's ``level`` and ``summary``, raised where a work cap held a step.
+
+    Error control held to its cap on work (``ERROR_WORK``) keeps an estimate above the
+    tolerance, maybe by orders of magnitude: a WARN with the numbers, not "running". A step
+    given up at its method's cap on internal steps is said to be that, not a non-finite one.
+    """
+    why = safeguards.why
+    if isinstance(why, ErrorReason) and why.capped and level < DiagnosticStatus.WARN:
+        return DiagnosticStatus.WARN, (
+            f'error control capped: estimate {safeguards.error_estimate:.3g} against '
+            f'tolerance {why.tolerance:.3g} at {why.substeps} {why.method} substeps, the most '
+            'a step may take (ERROR_WORK); a larger tolerance or fewer bodies meets it')
+    if (level == DiagnosticStatus.ERROR and failed_ticks
+            and 'capped' in safeguards.last_failure):
+        return level, (f'{failed_ticks} ticks stopped at a step given up, state kept: '
+                       f'{safeguards.last_failure}')
+    return level, summary

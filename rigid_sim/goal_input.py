@@ -11,17 +11,30 @@ seconds from now), rounded to the tick grid. At the next tick the goal is solved
 on ``~/<body>/goal_path`` (nav_msgs/Path) and the outcome, or the reason for a refusal, on
 /diagnostics. A refused goal changes nothing.
 
-Where solving may take longer than a tick should (a flight of more than ``INLINE_STEPS``
-steps that is not a free flight under the exact flow, with a wall clock), it runs in a
-worker thread on a snapshot of the world taken at the tick. The world has moved on by the
-time the answer comes, so it is re-anchored at the tick that applies it: solved again from
-the world as it is then, starting from the worker's solution and Jacobian, which takes a
-few one-copy flights where the first solve took many. Without a wall clock (rate 0, or a
-loop stopped for lockstep) every goal is solved in the tick, so a lockstep run stays
-repeatable to the bit.
+A solve is Newton's method over flights of the world, from up to a dozen starts: its work
+is the body-steps of one flight (steps times bodies) times the flights it may take, which
+no step count bounds. With a wall clock a goal is solved in the tick only where that worst
+case stays under ``INLINE_WORK`` (or the flight is free under the exact flow, exact at any
+step); the rest run in a worker thread on a snapshot of the world taken at the tick, so
+that a goal never holds up /clock or control. The world has moved on by the time the answer
+comes, so it is re-anchored at the tick that applies it: solved again from the world as it
+is then, from the worker's solution and Jacobian only (no restarts), which takes a few
+one-copy flights where the first solve took many. Where that does not converge, the goal
+goes back to the worker from the world as it is then, at most ``CHASES`` times; where even
+one flight is above ``INLINE_WORK`` (a large world, a far goal), it is refused, saying so.
+Without a wall clock (rate 0, or a loop
+stopped for lockstep) every goal is solved in the tick, so a lockstep run stays repeatable
+to the bit.
+
+The worker holds at most one goal per body: a newer goal for a body replaces the one still
+waiting (the latest wins), and one solved meanwhile is dropped, each reported on
+/diagnostics as superseded, so that a flood of goals neither queues solves without end nor
+holds a snapshot of the world per message.
 """
+import itertools
 import queue
 import threading
+from collections import OrderedDict
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
@@ -30,12 +43,21 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.core.goal_flight import free_under_exact_flow, snapshot
-from rigid_sim.core.goals import Goal, GoalSolver
+from rigid_sim.core.goal_newton import MAX_ITERATIONS
+from rigid_sim.core.goals import RESTARTS, Goal, GoalSolver
 from rigid_sim.core.text import shown
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
 DEMAND_REFRESH = 0.5   # s of wall time between two looks for new goal publishers
-INLINE_STEPS = 200     # world steps of a flight solved in the tick; longer ones in a thread
+# Body-steps (world steps of a flight times bodies) a solve in the tick may fly at worst:
+# about 10 ms of flights of one body's copies on this machine; a solve that may fly more
+# runs in the worker thread.
+INLINE_WORK = 20_000
+# Flights a solve may fly at worst: MAX_ITERATIONS Newton iterations from each start (the
+# given one, the corrected and the current motion, RESTARTS draws), each iteration at least
+# one flight, twice over where a coarse flight comes first.
+WORST_FLIGHTS = 2 * MAX_ITERATIONS * (RESTARTS + 3)
+CHASES = 3             # times a goal whose re-anchor failed goes back to the worker
 WARNING_PERIOD = 2.0   # s of wall time between two warnings about refused goals
 
 
@@ -57,9 +79,10 @@ class GoalInput:
         self._subscriptions, self._paths = [], {}
         self._inbox = {}      # body index -> newest goal message since the last tick
         self._results = queue.SimpleQueue()   # finished worker solves
-        self._jobs = None     # the worker's queue, once a solve needs it
+        self._jobs = None     # the worker's Jobs, once a solve needs it
         self._latest = {}     # body index -> number of its newest solve in a thread
-        self.solved = self.refused = 0
+        self._numbers = itertools.count(1)   # of the solves in a thread, never reused
+        self.solved = self.refused = self.superseded = 0
         self.wire(scene, world)
         node.create_timer(DEMAND_REFRESH, self.subscribe_on_demand,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -78,7 +101,8 @@ class GoalInput:
             self._node.destroy_subscription(subscription)
         for publisher in self._paths.values():
             self._node.destroy_publisher(publisher)
-        self._subscriptions, self._paths, self._inbox, self._latest = [], {}, {}, {}
+        self._subscriptions, self._paths, self._inbox = [], {}, {}
+        self._forget_jobs()
         self._scene, self._world, self._solver, self._time = scene, world, None, world.time
         self._awaited = self.plan(scene) if plan is None else plan
 
@@ -105,13 +129,19 @@ class GoalInput:
         if world is not self._world:
             self.wire(scene, world)
         if world.time < self._time:   # a reset: goals of the old run are void
-            self._inbox, self._latest = {}, {}
+            self._inbox = {}
+            self._forget_jobs()
         self._time = world.time
         while not self._results.empty():
             self._finish(settings, *self._results.get())
         inbox, self._inbox = self._inbox, {}
         for index, message in inbox.items():
             self._start(index, message, settings)
+
+    def _forget_jobs(self):
+        self._latest = {}
+        if self._jobs is not None:
+            self._jobs.clear()
 
     def solve_now(self, goal, settings):
         """Solve ``goal`` in this thread and apply it; the GoalSolution (GoalRefused raised)."""
@@ -146,42 +176,81 @@ class GoalInput:
         try:
             goal = self.goal(index, message, settings)
             if self._in_tick(goal, settings):
-                self._latest.pop(index, None)   # an older solve in a thread is void
+                self._supersede(index)   # an older solve in a thread is void
                 self.solve_now(goal, settings)
                 return
         except ValueError as error:   # GoalRefused is a ValueError
             self._report_refusal(index, error)
             return
-        number = self._latest[index] = self._latest.get(index, 0) + 1
+        self._to_worker(goal, settings)
+
+    def _to_worker(self, goal, settings, start=None, chases=0):
+        """Queue ``goal`` for the worker, from a snapshot of the world as it is now.
+
+        ``start``: the (values, Jacobian) of an earlier solve to begin from; ``chases``:
+        how many times the goal came back from a failed re-anchor.
+        """
+        index = goal.body
+        self._supersede(index)
+        number = self._latest[index] = next(self._numbers)
         if self._jobs is None:
-            self._jobs = queue.SimpleQueue()
+            self._jobs = Jobs()
             threading.Thread(target=_work, args=(self._jobs, self._results), daemon=True,
                              name='rigid_sim goals').start()
-        self._jobs.put((number, goal, snapshot(self._world), self._solver_for(settings)
-                        .time_step, self._world))
+        self._jobs.put(index, (number, goal, snapshot(self._world),
+                               self._solver_for(settings).time_step, self._world, start,
+                               chases))
+
+    def _supersede(self, index):
+        """Void body ``index``'s solve in the worker, if any: waiting, it is never solved."""
+        if self._latest.pop(index, None) is None:
+            return
+        waiting = self._jobs.take(index)
+        self._report_superseded(index, 'waiting' if waiting else 'being solved')
+
+    def _flight_work(self, goal, settings):
+        """Body-steps of one flight of the whole world to ``goal``'s time."""
+        steps = (goal.at - self._world.time) * settings.substeps / settings.time_step
+        return steps * self._world.bodies.count
 
     def _in_tick(self, goal, settings):
         world = self._world
         loop = getattr(self._node, 'loop', None)
-        steps = (goal.at - world.time) * settings.substeps / settings.time_step
-        return (settings.rate == 0.0 or getattr(loop, 'stopped', True) or steps <= INLINE_STEPS
+        return (settings.rate == 0.0 or getattr(loop, 'stopped', True)
+                or self._flight_work(goal, settings) * WORST_FLIGHTS <= INLINE_WORK
                 or goal.unknowns != 'wrench'
                 and free_under_exact_flow(world, goal.body, world.inputs))
 
-    def _finish(self, settings, number, goal, outcome, world):
+    def _finish(self, settings, number, goal, outcome, world, chases):
         if world is not self._world or self._latest.get(goal.body) != number:
-            return   # another scene, a reset or a newer goal for the body since
+            return   # another scene, a reset, or superseded (reported then)
         del self._latest[goal.body]
         if isinstance(outcome, Exception):
             self._report_refusal(goal.body, outcome)
             return
+        work = self._flight_work(goal, settings)
+        if work > INLINE_WORK:   # no later tick would fly it either
+            self._report_refusal(goal.body, ValueError(
+                f'solved in the worker thread but not re-anchored: a flight of the world to '
+                f'{goal.at!r} s is {work:.0f} body-steps, more than a tick flies '
+                f'({INLINE_WORK}); a nearer goal time reaches it'))
+            return
         try:   # re-anchored: from the world as it is now, near the worker's solution
             solution = self._solver_for(settings).solve(
-                goal, path=True, start=outcome.values, jacobian=outcome.jacobian)
+                goal, path=True, start=outcome.values, jacobian=outcome.jacobian,
+                restarts=False)
         except ValueError as error:   # GoalRefused is a ValueError
-            self._report_refusal(goal.body, error)
+            self._chase(goal, settings, (outcome.values, outcome.jacobian), chases, error)
             return
         self._applied(solution, settings, 'worker thread, re-anchored at the tick')
+
+    def _chase(self, goal, settings, start, chases, why):
+        """Solve ``goal`` again in the worker from the world as it is now; refuse if too often."""
+        if chases >= CHASES or goal.at <= self._world.time:
+            self._report_refusal(goal.body, ValueError(
+                f'not re-anchored at the tick {chases + 1} times: {why}'))
+            return
+        self._to_worker(goal, settings, start, chases + 1)
 
     def _applied(self, solution, settings, where):
         self._solver.apply(solution)
@@ -217,18 +286,58 @@ class GoalInput:
         self._publish(name, DiagnosticStatus.WARN, f'goal refused: {error}',
                       {'body': name, 'refused goals': self.refused})
 
+    def _report_superseded(self, index, state):
+        self.superseded += 1
+        name = self._scene.bodies[index].name
+        self._publish(name, DiagnosticStatus.WARN, f'goal superseded: a newer goal for '
+                      f'{name!r} came while it was {state} in the worker thread',
+                      {'body': name})
+
     def _publish(self, name, level, summary, values):
         self._diagnostics.publish(conversions.diagnostics(
             f'{self._node.get_name()}: goal {name}', self._world.time, level, summary,
-            {**values, 'goals solved': self.solved, 'goals refused': self.refused}))
+            {**values, 'goals solved': self.solved, 'goals refused': self.refused,
+             'goals superseded': self.superseded}))
+
+
+class Jobs:
+    """The worker's goals: at most one per body, the oldest body's first."""
+
+    def __init__(self):
+        self._waiting = OrderedDict()   # body index -> job
+        self._ready = threading.Condition()
+
+    def put(self, index, job):
+        """Queue ``job`` for body ``index``, which has none waiting."""
+        with self._ready:
+            self._waiting[index] = job
+            self._ready.notify()
+
+    def take(self, index):
+        """Withdraw body ``index``'s waiting job; whether there was one."""
+        with self._ready:
+            return self._waiting.pop(index, None) is not None
+
+    def clear(self):
+        """Withdraw every waiting job."""
+        with self._ready:
+            self._waiting.clear()
+
+    def get(self):
+        """Return the oldest waiting job, waiting for one if there is none."""
+        with self._ready:
+            while not self._waiting:
+                self._ready.wait()
+            return self._waiting.popitem(last=False)[1]
 
 
 def _work(jobs, results):
     """Solve goals from world snapshots, one after another, for ever (a daemon thread)."""
     while True:
-        number, goal, copied, step, world = jobs.get()
+        number, goal, copied, step, world, start, chases = jobs.get()
         try:
-            outcome = GoalSolver(copied, step).solve(goal)
+            values, jacobian = start if start is not None else (None, None)
+            outcome = GoalSolver(copied, step).solve(goal, start=values, jacobian=jacobian)
         except Exception as error:   # noqa: B902 - whatever it is, the tick reports it
             outcome = error
-        results.put((number, goal, outcome, world))
+        results.put((number, goal, outcome, world, chases))

@@ -90,6 +90,17 @@ def warm_up(world, name, logger, integrator=None, imus=None):
     return compiled
 
 
+class TickInProgress:
+    """The steps of one tick still to take, for the world it began on."""
+
+    def __init__(self, world, steps):
+        self.world = world
+        self.time = world.time   # where the last step ended: a reset or a new state stops it
+        self.left = steps
+        self.busy = 0.0          # s of wall time the tick has taken so far
+        self.slices = 0          # times it returned to the loop before its end
+
+
 def check_frames(scene, settings):
     """Raise ParameterError unless ``settings.world_frame`` is distinct from the scene's frames."""
     try:
@@ -123,6 +134,7 @@ class RigidSimNode(Node):
         self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger(),
                                 imus=scene_imus(self.scene, self.world))
         self.ticks = 0
+        self._ticking = None   # the TickInProgress the loop left part-done, if any
         self.qos_overrides = QosOverrides(self)
         self.clock = ClockOutput(self.qos_overrides)
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
@@ -185,40 +197,69 @@ class RigidSimNode(Node):
         """Apply stored inputs, advance by ``time_step`` in ``substeps`` steps, publish.
 
         While paused, the inputs are applied and the outputs published, at the same time.
+        A tick the loop left part-done is finished first, and is then this tick.
         """
         self._tick(advance=not self.paused)
 
-    def _tick(self, advance):
+    def _tick(self, advance, until=None):
+        """Run one tick, or what is left of the one in progress; whether it is done.
+
+        ``until`` (a ``time.perf_counter`` deadline; None: no limit) ends the tick's steps
+        early, after at least one: the loop runs the rest in its next executor rounds, with
+        control answered between them (docs/design.md, "Control apart from the work").
+        ``advance`` is read when a tick starts only.
+        """
         started = time.perf_counter()
-        self.inputs.apply(self.world, self.scene, self.settings)
-        self.goals.apply(self.world, self.scene, self.settings)
-        if advance:
-            self._advance()
-        self.health.stats.add(time.perf_counter() - started)
+        if self._ticking is None:
+            self.inputs.apply(self.world, self.scene, self.settings)
+            self.goals.apply(self.world, self.scene, self.settings)
+            self._ticking = TickInProgress(self.world, self.settings.substeps if advance else 0)
+        ticking = self._ticking
+        ticking.busy += time.perf_counter() - started
+        if not self._advance(ticking, until):
+            return False
+        self._ticking = None
+        self.health.stats.add(ticking.busy)
         if self.settings.publish_clock:
             self.clock.publish(self.world.time)
         self.imu_outputs.publish(self.world)
         if self.ticks % self.settings.publish_every == 0:
             self.outputs.publish(self.world)
         self.ticks += 1
+        return True
 
-    def _advance(self):
-        """Integrate one tick; stop at a step the world gives up, keeping its last good state.
+    def _advance(self, ticking, until=None):
+        """Take the steps left of ``ticking``; whether the tick's steps are all done.
 
-        The world never stores a non-finite value, so what is published stays finite; time
-        does not advance past the failed step and the next tick tries again.
+        Steps stop at ``until`` (after at least one), and at a step the world gives up,
+        keeping its last good state: the world never stores a non-finite value, so what is
+        published stays finite; time does not advance past the failed step and the next
+        tick tries again. A tick whose world was replaced or reset since it began has its
+        remaining steps dropped: they were meant for a world that is gone.
         """
+        started = time.perf_counter()
         step = self.settings.time_step / self.settings.substeps
-        for _ in range(self.settings.substeps):
-            stepped = self.world.step(step)
-            self.health.stats.note_error(self.world.diagnostics.error_estimate)
-            if not stepped:
-                self.health.stats.failed_ticks += 1
-                self.get_logger().error(
-                    f'gave up a step at t = {self.world.time:g} s, state kept: '
-                    f'{self.world.diagnostics.last_failure}',
-                    throttle_duration_sec=WARNING_PERIOD)
-                return
+        try:
+            while ticking.left > 0:
+                if ticking.world is not self.world or ticking.time != self.world.time:
+                    return True
+                stepped = self.world.step(step)
+                self.health.stats.note_error(self.world.diagnostics.error_estimate)
+                ticking.left -= 1
+                ticking.time = self.world.time
+                if not stepped:
+                    self.health.stats.failed_ticks += 1
+                    self.get_logger().error(
+                        f'gave up a step at t = {self.world.time:g} s, state kept: '
+                        f'{self.world.diagnostics.last_failure}',
+                        throttle_duration_sec=WARNING_PERIOD)
+                    return True
+                if until is not None and ticking.left > 0 and time.perf_counter() >= until:
+                    ticking.slices += 1
+                    return False
+            return True
+        finally:
+            ticking.busy += time.perf_counter() - started
 
     def refresh_listeners(self):
         """Ask who listens to /clock and the state outputs at their next publication."""

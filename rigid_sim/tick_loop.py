@@ -15,9 +15,11 @@ of the executor. While paused the loop then stands still (there is nothing to ca
 nothing new to publish); ``~/step`` still advances it.
 
 Control apart from the work: one timer callback ticks for at most ``SLICE`` seconds of wall
-time (and at least one tick), then returns to the executor, which answers services,
-parameter calls and signals before the next slice. A catch-up, the ticks of a multi-tick
-:class:`StepJob` and ticking at rate 0 all run in such slices.
+time, then returns to the executor, which answers services, parameter calls and signals
+before the next slice. A catch-up, the ticks of a multi-tick :class:`StepJob` and ticking
+at rate 0 all run in such slices, and so does a single tick longer than a slice (many
+``substeps``, many bodies): the tick is told the slice's end and stops after the world
+step that passes it, to go on in the next callback; it counts as run once it is done.
 """
 from collections import deque
 import math
@@ -40,12 +42,13 @@ class StepJob:
     def __init__(self, ticks, done):
         self.left = ticks
         self.ran = 0
+        self.why = ''   # what ends it early, once something does
         self._done = done
 
     def finish(self, why=''):
         """End the job: report the ticks it ran."""
         self.left = 0
-        self._done(self.ran, why)
+        self._done(self.ran, why or self.why)
 
 
 class TickLoop:
@@ -56,7 +59,9 @@ class TickLoop:
     node : rclpy.node.Node
         Owns the timers.
     tick : callable
-        ``tick(advance)``: one tick of the simulation; ``advance`` False while paused.
+        ``tick(advance, until)``: one tick of the simulation, or the rest of the one in
+        progress; ``advance`` False while paused; ``until`` a ``perf_counter`` time at
+        which to stop early. Returns False when it stopped early (the tick is not done).
     rate : float
         Ticks per second of wall time, Hz; 0 ticks as fast as the CPU allows.
     """
@@ -69,6 +74,7 @@ class TickLoop:
         self.dropped = 0        # ticks given up behind wall time since the last report
         self.last_tick = monotonic()   # wall time of the latest tick, for /diagnostics
         self.jobs = deque()     # StepJobs, run in order, each to its end
+        self.partial = False    # a tick stopped at a slice's end, to go on at the next call
         self._origin = 0.0      # wall time (monotonic) at which tick 0 was due
         self._done = 0          # ticks run since the origin
         # STEADY_TIME: never sim time, which this loop makes.
@@ -103,7 +109,7 @@ class TickLoop:
         self.paused = paused
         if self.stopped:
             return
-        if self.rate == 0.0 and paused:
+        if self.rate == 0.0 and paused and not self.partial:   # else once the tick is done
             self.timer.cancel()
         elif self.timer.is_canceled() and not paused:
             self.timer.reset()
@@ -123,10 +129,21 @@ class TickLoop:
         self._job_timer.reset()
 
     def end_jobs(self, why):
-        """End the running job after its current tick, and every queued one, saying ``why``."""
+        """End the running job after its current tick, and every queued one, saying ``why``.
+
+        A tick stopped at a slice's end is finished first (the world is left at the end of
+        a tick, never within one): the running job then ends at its next round.
+        """
+        running = None
+        if self.partial and self.jobs:
+            running = self.jobs.popleft()
+            running.left, running.why = 1, why
         while self.jobs:
             self.jobs.popleft().finish(why)
-        self._job_timer.cancel()
+        if running is None:
+            self._job_timer.cancel()
+        else:
+            self.jobs.append(running)
 
     def since_last_tick(self):
         """Seconds of wall time since the latest tick; None where none is due on the clock."""
@@ -139,9 +156,12 @@ class TickLoop:
         dropped, self.dropped = self.dropped, 0
         return dropped
 
-    def _run(self, advance):
-        self._tick(advance)
-        self.last_tick = monotonic()
+    def _run(self, advance, until):
+        """Run a tick, or the rest of the one in progress, until ``until``; whether it is done."""
+        self.partial = self._tick(advance, until) is False
+        if not self.partial:
+            self.last_tick = monotonic()
+        return not self.partial
 
     def _on_timer(self):
         if self.jobs:   # a step job ticks the world; the schedule starts again after it
@@ -149,9 +169,10 @@ class TickLoop:
             return
         if self.rate == 0.0:
             end = perf_counter() + SLICE
-            self._run(not self.paused)
-            while perf_counter() < end:
-                self._run(not self.paused)
+            while self._run(not self.paused, end) and not self.paused and perf_counter() < end:
+                pass
+            if self.paused and not self.partial:   # paused while a tick was under way
+                self.timer.cancel()
             return
         self._catch_up()
 
@@ -164,7 +185,8 @@ class TickLoop:
             self._origin, self._done, owed = now, 0, 1
         end = perf_counter() + SLICE
         for ran in range(1, owed + 1):   # the rest, if any, at the next wake-up
-            self._run(not self.paused)
+            if not self._run(not self.paused, end):
+                return
             self._done += 1
             if perf_counter() > end and ran < owed:
                 return
@@ -174,10 +196,11 @@ class TickLoop:
         while self.jobs and perf_counter() <= end:
             job = self.jobs[0]
             while job.left > 0 and perf_counter() <= end:
-                self._run(True)
+                if not self._run(True, end):
+                    return   # the tick goes on in the next round
                 job.left -= 1
                 job.ran += 1
             if job.left == 0:
-                self.jobs.popleft().finish()
+                self.jobs.popleft().finish(job.why)
         if not self.jobs:
             self._job_timer.cancel()

@@ -2,12 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """Isolation for the tests that speak ROS.
 
-Every run gets its own ROS_DOMAIN_ID (from the pid), discovery limited to this machine
+Every run gets its own ROS_DOMAIN_ID (from the pid, unless the user set one: then that
+one, so that runs the user keeps apart stay apart), discovery limited to this machine
 (docs/ros_notes.md: unset, DDS multicasts out of the network interface) and a temporary log
 directory, set here before any test starts rclpy or a node process. In-process tests narrow
 discovery further, to OFF. The node is driven through the public test kit (the
 ``rigid_sim`` fixture of rigid_sim.testing); ``ros_tools.py`` builds the messages a test's
-own node sends and reads what it heard.
+own node sends and reads what it heard. Every process a test starts goes through
+``processes.py`` and is ended, with all it forked, when the test ends, however it ended.
 """
 import importlib.util
 import os
@@ -16,8 +18,11 @@ import tempfile
 
 import pytest
 
+import processes
+
 ROS_LOG_DIR = tempfile.mkdtemp(prefix='rigid_sim_test_logs_')
-os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)  # 1..101: valid on Linux
+if not os.environ.get('ROS_DOMAIN_ID', '').strip():
+    os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)  # 1..101: valid on Linux
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'  # subprocess tests need localhost
 os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated, and it overrides the range
 os.environ.pop('ROS_STATIC_PEERS', None)
@@ -39,7 +44,16 @@ def pytest_configure(config):
 
 
 def pytest_sessionfinish(session, exitstatus):
+    processes.end_since(0)
     shutil.rmtree(ROS_LOG_DIR, ignore_errors=True)
+
+
+@pytest.fixture(autouse=True)
+def end_started_processes():
+    """End, with all they forked, the processes a test started, whatever became of it."""
+    mark = processes.started()
+    yield
+    processes.end_since(mark)
 
 
 @pytest.fixture

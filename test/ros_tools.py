@@ -16,7 +16,7 @@ from visualization_msgs.msg import MarkerArray
 
 from rigid_sim import conversions
 
-TIMEOUT = 15.0  # s; first discovery between processes can take seconds (docs/ros_notes.md)
+TIMEOUT = 60.0  # s; first discovery between processes takes seconds, more on a loaded machine
 
 
 def spin_until(executor, condition, timeout=TIMEOUT, what='condition'):

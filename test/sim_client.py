@@ -20,10 +20,11 @@ from rclpy.node import Node
 from simulation_interfaces import srv
 from simulation_interfaces.action import SimulateSteps
 
+import processes
 from ros_tools import TIMEOUT, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
-START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
+START_TIMEOUT = 600.0  # s: imports, a cold compile, discovery, on a loaded 2-core machine
 SERVICES = {'get_simulator_features': srv.GetSimulatorFeatures,
             'get_simulation_state': srv.GetSimulationState,
             'set_simulation_state': srv.SetSimulationState,
@@ -53,7 +54,7 @@ class SimProcess:
         assert EXECUTABLE.is_file(), f'{EXECUTABLE} missing: pip install -e . first'
         arguments = [argument for parameter in (f'scene:={scene}', *parameters)
                      for argument in ('-p', parameter)]
-        self.process = subprocess.Popen(
+        self.process = processes.start(
             [str(EXECUTABLE), '--ros-args', '-r', f'__ns:={namespace}', *arguments], cwd=cwd,
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.prefix = f'{namespace}/rigid_sim'
@@ -92,7 +93,7 @@ class SimProcess:
         try:
             status = self.process.wait(timeout=TIMEOUT)
         finally:
-            self.process.kill()
+            processes.end(self.process)
             output = self.process.communicate()[0]
             self.executor.shutdown()
             self.node.destroy_node()

@@ -17,6 +17,7 @@ from types import SimpleNamespace
 from numba import njit
 from numba.core import event
 
+import processes
 import rigid_sim
 from rigid_sim.core import compile_cache
 from rigid_sim.core.warm_up import Compilations
@@ -52,7 +53,7 @@ with event.install_listener('numba:compile', compilations):
 print(compilations.count, compile_cache.STATE.healed, compile_cache.caching_note())
 '''
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
-EXIT_TIMEOUT = 30.0   # s: a liveness bound only
+EXIT_TIMEOUT = 120.0  # s: a liveness bound only
 
 
 def cached_files(root):
@@ -288,9 +289,9 @@ def test_a_node_stopped_while_compiling_without_a_cache_leaves_no_files(tmp_path
     temporary = tmp_path / 'tmp'
     temporary.mkdir()
     environment = dict(os.environ, NUMBA_CACHE_DIR=str(blocker), TMPDIR=str(temporary))
-    node = subprocess.Popen([str(EXECUTABLE), '--ros-args', '-r',
-                             f'__ns:=/cache{os.getpid()}'], env=environment,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    node = processes.start([str(EXECUTABLE), '--ros-args', '-r',
+                            f'__ns:=/cache{os.getpid()}'], env=environment,
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         lines = []
         while not (lines and 'compiling' in lines[-1]):
@@ -300,7 +301,7 @@ def test_a_node_stopped_while_compiling_without_a_cache_leaves_no_files(tmp_path
         output = ''.join(lines) + node.communicate(timeout=EXIT_TIMEOUT)[0]
     finally:
         if node.poll() is None:
-            node.kill()
+            processes.end(node)
     assert node.returncode == 0, output
     assert f'not cached: {blocker}/rigid_sim/numba/' in lines[-1]
     assert 'cannot be used (Not a directory)' in lines[-1], lines[-1]

@@ -19,6 +19,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rcl_interfaces.srv import GetParameters
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+import processes
 from ros_tools import spin_until
 from std_srvs.srv import SetBool, Trigger
 
@@ -160,8 +161,8 @@ BUSY_PREPARATION = textwrap.dedent('''
 
 def _node_process(code, tmp_path):
     environment = dict(os.environ, ROS_LOG_DIR=str(tmp_path))
-    return subprocess.Popen([sys.executable, '-c', code], stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, env=environment, text=True)
+    return processes.start([sys.executable, '-c', code], stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, env=environment, text=True)
 
 
 def test_a_stop_signal_during_a_runtime_preparation_ends_the_node_at_once(tmp_path):

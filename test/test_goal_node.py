@@ -134,7 +134,7 @@ def test_the_kit_solves_a_goal_and_the_body_gets_there(rigid_sim):
 
 def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim, monkeypatch):
     """With a wall clock a long solve runs in a thread; ticks go on meanwhile."""
-    monkeypatch.setattr(goal_input, 'INLINE_STEPS', 0)
+    monkeypatch.setattr(goal_input, 'WORST_FLIGHTS', 10 ** 9)
     sim = rigid_sim(yaml=SCENE, time_step=DT)
     sim.node.loop.stopped = False   # as if a wall clock ticked it: solves go to the thread
     user = User(sim)

@@ -16,8 +16,10 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_share_directory
 
+import processes
+
 ROOT = Path(__file__).resolve().parents[1]
-START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
+START_TIMEOUT = 600.0  # s: imports, a cold compile, discovery, on a loaded 2-core machine
 BUILD_TIMEOUT = 120.0  # s; only a hung build comes near it, on a loaded machine too
 
 
@@ -70,16 +72,16 @@ def test_colcon_install_has_ament_layout_and_its_executable_starts(tmp_path, mon
 
     site_packages, = prefix.glob('lib/python3*/site-packages')
     env = dict(os.environ, AMENT_PREFIX_PATH=str(prefix), PYTHONPATH=str(site_packages))
-    process = subprocess.Popen([str(executable), '--ros-args', '-r', f'__ns:=/i{os.getpid()}'],
-                               cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
+    process = processes.start([str(executable), '--ros-args', '-r', f'__ns:=/i{os.getpid()}'],
+                              cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
     try:
         started = first_line_containing(process, 'simulating', START_TIMEOUT)
         assert str(share / 'config' / 'scenes' / 'default.yaml') in started
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=START_TIMEOUT) == 0
     finally:
-        process.kill()
+        processes.end(process)
         process.communicate()
 
 

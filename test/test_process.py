@@ -25,20 +25,21 @@ from std_srvs.srv import SetBool, Trigger
 
 from physics_cases import FLIGHT_STEP as STEP, FLIGHT_V0 as V0, FLIGHT_X0 as X0
 from physics_cases import FLYING_BOX
+import processes
 from rigid_sim import conversions
 from ros_tools import TIMEOUT, record, spin_until
 
 EXECUTABLE = Path(sys.executable).with_name('rigid_sim_node')
 NAMESPACE = f'/t{os.getpid()}'
-START_TIMEOUT = 120.0  # s: imports, a cold compile of the scene's kernels, discovery
+START_TIMEOUT = 600.0  # s: imports, a cold compile, discovery, on a loaded 2-core machine
 
 
 def start_node(*ros_arguments, cwd):
     """Start the installed console script with ``--ros-args`` in this run's namespace."""
     assert EXECUTABLE.is_file(), f'{EXECUTABLE} missing: pip install -e . first'
-    return subprocess.Popen([str(EXECUTABLE), '--ros-args', '-r', f'__ns:={NAMESPACE}',
-                             *ros_arguments], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    return processes.start([str(EXECUTABLE), '--ros-args', '-r', f'__ns:={NAMESPACE}',
+                            *ros_arguments], cwd=cwd, stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True)
 
 
 @pytest.fixture
@@ -83,7 +84,7 @@ def test_node_process_publishes_poses_and_moves_under_a_wrench(probe, tmp_path):
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=TIMEOUT) == 0
     finally:
-        process.kill()
+        processes.end(process)
         output = process.communicate()[0]
     assert 'simulating 3 bodies' in output and 'wrenches.yaml' in output
 
@@ -150,7 +151,7 @@ def run_lockstep(node, executor, cwd, calls, step_ticks=5):
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=TIMEOUT) == 0
     finally:
-        process.kill()
+        processes.end(process)
         process.communicate()
         node.destroy_subscription(subscription)
         node.destroy_client(client)
@@ -234,5 +235,5 @@ def test_rate_zero_ticks_without_a_wall_clock_and_stands_still_while_paused(prob
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=TIMEOUT) == 0
     finally:
-        process.kill()
+        processes.end(process)
         process.communicate()

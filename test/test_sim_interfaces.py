@@ -23,6 +23,7 @@ from simulation_interfaces.msg import EntityFilters, Result, SimulationState, Si
 from simulation_interfaces.srv import (
     ResetSimulation, SetEntityState, SetSimulationState, SpawnEntity)
 
+import processes
 from sim_client import EXECUTABLE, SimProcess, START_TIMEOUT
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -352,8 +353,8 @@ def test_the_readme_spawn_example_prints_the_damped_fall(tmp_path):
     section = readme[readme.index('### Standard simulator interfaces'):]
     example = re.search(r'```python\n(.*?)```', section, re.S).group(1)
     (tmp_path / 'spawn.py').write_text(example)
-    node = subprocess.Popen([str(EXECUTABLE)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    node = processes.start([str(EXECUTABLE)], cwd=tmp_path, stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True)
     try:
         run = subprocess.run([sys.executable, 'spawn.py'], cwd=tmp_path, capture_output=True,
                              text=True, timeout=START_TIMEOUT)

@@ -63,7 +63,7 @@ def make_loop(rate=RATE, tick=None):
     """Return the loop, its wall timer's callback, and the ticks run (each one's advance)."""
     ticks = []
     node = FakeNode()
-    loop = TickLoop(node, tick or ticks.append, rate)
+    loop = TickLoop(node, tick or (lambda advance, until: ticks.append(advance)), rate)
     return loop, node.timers[0].callback, ticks
 
 
@@ -188,7 +188,7 @@ class SlowTicks:
     def __init__(self, clock, cost):
         self.clock, self.cost, self.ticks = clock, cost, []
 
-    def __call__(self, advance):
+    def __call__(self, advance, until):
         self.ticks.append(advance)
         self.clock.now += self.cost
 

@@ -2,13 +2,17 @@
 # SPDX-License-Identifier: Apache-2.0
 """Control latency of ``rigid_sim_node``: calls answered and signals obeyed while it works.
 
-Part of ``rigid_sim_bench node``. The executable runs in its own process, as a user starts
-it; a client in this process, over DDS, times a parameter call (``get_parameters``, the
-slowest of five) and a ``~/pause`` call from sending to answer, and then the process's exit
-after SIGTERM, in three states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime
-switch to an integrator whose kernels are not in the (fresh) cache, and overload (1000
-bodies at rate 1000, more than one core can tick). The node promises each answer within
-100 ms and each stop within 0.5 s.
+Part of ``rigid_sim_bench node``. The executable runs in its own process group, as a user
+starts it; a client in this process, over DDS, times parameter calls (``get_parameters``,
+one after another: p50 and p99 of the samples) and a ``~/pause`` call from sending to
+answer, and then the process's exit after SIGTERM (its status and how long it took), in
+states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime switch to an integrator
+whose kernels are not in the (fresh) cache, overload (1000 bodies at rate 1000, more than
+one core can tick), a goal on the springs scene, a flood of goals (150 Hz), 1000 substeps
+a tick on 1000 bodies, dopri5 at tolerance 1e-12 on a rod spinning at 10 000 rad/s, a
+GetEntitiesStates of 20 000 bodies and a spawn of 5000 bodies. The node promises each
+answer within 100 ms and each stop, with status 0, within 0.5 s. The machine's load
+average over the run is given: other processes' load lengthens every number.
 """
 import os
 import signal
@@ -16,25 +20,54 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections import namedtuple
 
+import numpy as np
 import rclpy
+from geometry_msgs.msg import PoseStamped
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from std_srvs.srv import SetBool, Trigger
 
 from rigid_sim.deferred import SERVICE_QOS
 
-READY_TIMEOUT = 300.0   # s; a cold start compiles
+READY_TIMEOUT = 600.0   # s; a cold start compiles, a 20 000-body scene loads
 ANSWER_TIMEOUT = 60.0   # s
 EXIT_TIMEOUT = 60.0     # s
-SAMPLES = 5             # parameter calls per state, one after the other; the slowest counts
-# (state, node parameters, work started by the client, environment: a fresh kernel cache)
+SAMPLES = 40            # parameter calls per state, one after the other, at least
+FLOOD_SECONDS = 10.0    # s of a flood of goals, sampled throughout
+FLOOD_RATE = 150.0      # Hz of goals in the flood
+# A thin rod (moments 1e-4, 1, 1.0001 kg m^2) spun at 10 000 rad/s about its middle axis.
+FAST_ROD = """
+bodies:
+  - name: rod
+    shape: {type: box, size: [0.999999995, 0.0099995, 0.0001]}
+    mass: 12.0
+    twist: {linear: [0.0, 0.0, 0.0], angular: [0.0, 10000.0, 10.0]}
+    wrench_input: false
+"""
+# A state: its name, its scene ('boxes': the N boxes the caller gives, a scene file's
+# name in the log directory, or a packaged one), node parameters, the work the client
+# starts and whether the kernel cache starts empty.
+State = namedtuple('State', 'name scene parameters work fresh_cache')
 STATES = (
-    ('long ~/step (1000 bodies, 10 000 ticks)',
-     ['rate:=0.0', 'start_paused:=true', 'step_ticks:=10000', 'substeps:=5'], 'step', False),
-    ('runtime compile (switch to exact_split4, cache empty)',
-     ['rate:=100.0', 'integrator:=semi_implicit_euler'], 'compile', True),
-    ('overload (1000 bodies at rate 1000)', ['rate:=1000.0'], 'overload', False),
+    State('long ~/step (1000 bodies, 10 000 ticks)', 'boxes_1000',
+          ['rate:=0.0', 'start_paused:=true', 'step_ticks:=10000', 'substeps:=5'], 'step',
+          False),
+    State('runtime compile (switch to exact_split4, cache empty)', 'boxes_1000',
+          ['rate:=100.0', 'integrator:=semi_implicit_euler'], 'compile', True),
+    State('overload (1000 bodies at rate 1000)', 'boxes_1000', ['rate:=1000.0'], 'overload',
+          False),
+    State('a goal on the springs scene', 'springs.yaml', ['rate:=100.0'], 'goal', False),
+    State(f'a goal flood ({FLOOD_RATE:g} Hz, springs scene)', 'springs.yaml', ['rate:=100.0'],
+          'flood', False),
+    State('substeps 1000 x 1000 bodies', 'boxes_1000', ['rate:=100.0', 'substeps:=1000'],
+          'none', False),
+    State('dopri5 at tolerance 1e-12 on a fast rod', 'fast_rod',
+          ['rate:=100.0', 'integrator:=dopri5', 'tolerance:=1e-12'], 'none', False),
+    State('GetEntitiesStates of 20 000 bodies', 'boxes_20000', ['rate:=10.0'], 'states',
+          False),
+    State('spawn of 5000 bodies', 'default.yaml', ['rate:=100.0'], 'spawn', False),
 )
 
 
@@ -81,18 +114,43 @@ def _set_integrator(name):
     return SetParameters.Request(parameters=[Parameter(name='integrator', value=value)])
 
 
-def _start_work(client, work):
-    """Start the state's work; its future (the step's answer) or None."""
+def _goal(client, at=0.0):
+    """Publish a goal for the springs scene's bob: 0.3 m up and aside, ``at`` (0: horizon)."""
+    message = PoseStamped()
+    message.header.frame_id = 'world'
+    message.header.stamp.sec = int(at)
+    message.pose.position.x, message.pose.position.y, message.pose.position.z = 0.6, -0.3, 0.9
+    message.pose.orientation.w = 1.0
+    client.goals.publish(message)
+
+
+def _start_work(client, work, log_dir):
+    """Start the state's work; its future (a deferred answer) or None."""
     if work == 'step':
         return client.call(Trigger, 'step', Trigger.Request(), timeout=0.0)[1]
     if work == 'compile':
         client.call(SetParameters, 'set_parameters', _set_integrator('exact_split4'))
         time.sleep(1.0)   # well into the compile
+    if work in ('goal', 'flood'):
+        client.goals = client.node.create_publisher(PoseStamped, '/rigid_sim/bob/goal', 10)
+        client.spin_until(lambda: client.goals.get_subscription_count() > 0, READY_TIMEOUT)
+        _goal(client)
+        if work == 'flood':
+            client.flood = client.node.create_timer(1.0 / FLOOD_RATE, lambda: _goal(client))
+    if work == 'states':
+        from simulation_interfaces.srv import GetEntitiesStates
+        return client.call(GetEntitiesStates, 'get_entities_states',
+                           GetEntitiesStates.Request(), timeout=0.0)[1]
+    if work == 'spawn':
+        from simulation_interfaces.srv import SpawnEntity
+        request = SpawnEntity.Request(uri=os.path.join(log_dir, 'boxes_5000.yaml'),
+                                      allow_renaming=True)
+        return client.call(SpawnEntity, 'spawn_entity', request, timeout=0.0)[1]
     return None
 
 
 def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
-    """(parameter call s, ~/pause s, stop s) of one node process in one state of work."""
+    """(parameter call s samples, ~/pause s, exit status, stop s) of one node process."""
     environment = dict(os.environ, ROS_LOG_DIR=log_dir)
     with tempfile.TemporaryDirectory() as cache:
         if fresh_cache:
@@ -101,43 +159,62 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
         node = subprocess.Popen(
             [sys.executable, '-c', 'from rigid_sim import main; main.executable()',
              '--ros-args', *[part for argument in arguments for part in ('-p', argument)]],
-            env=environment, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            env=environment, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            start_new_session=True)
         try:
             for kind, name, request in ((GetParameters, 'get_parameters', GetParameters.Request(
                     names=['rate'])), (SetBool, 'pause', SetBool.Request(data=False))):
                 client.call(kind, name, request, READY_TIMEOUT)   # discovered, and answered
             if work == 'step':
                 client.call(SetBool, 'pause', SetBool.Request(data=True))
-            _start_work(client, work)
-            asked = max(client.call(GetParameters, 'get_parameters',
-                                    GetParameters.Request(names=['integrator']))[0]
-                        for _ in range(SAMPLES))
+            _start_work(client, work, log_dir)
+            until = time.monotonic() + (FLOOD_SECONDS if work == 'flood' else 0.0)
+            asked = []
+            while len(asked) < SAMPLES or time.monotonic() < until:
+                asked.append(client.call(GetParameters, 'get_parameters',
+                                         GetParameters.Request(names=['integrator']))[0])
             paused, _ = client.call(SetBool, 'pause', SetBool.Request(data=True))
             if work == 'step':   # the pause ended it: start another to stop in
-                _start_work(client, work)
+                _start_work(client, work, log_dir)
             signalled = time.perf_counter()
             node.send_signal(signal.SIGTERM)
-            node.wait(EXIT_TIMEOUT)
-            return asked, paused, time.perf_counter() - signalled
+            try:
+                status = node.wait(EXIT_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                status = None
+            return asked, paused, status, time.perf_counter() - signalled
         finally:
-            if node.poll() is None:
-                node.kill()
+            if getattr(client, 'flood', None) is not None:
+                client.node.destroy_timer(client.flood)
+                client.flood = None
+            try:   # the node and anything it started
+                os.killpg(node.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            node.wait()
 
 
-def measure(scene, log_dir):
-    """``[(state, parameter call s, pause s, stop s)]`` for every state of :data:`STATES`."""
+def measure(scenes, log_dir):
+    """``[(state, parameter call samples s, pause s, exit status, stop s)]`` per state.
+
+    ``scenes``: scene name of :data:`STATES` -> file; a name not in it is used as it is.
+    """
     client = Client(int(os.environ['ROS_DOMAIN_ID']))
     try:
-        return [(state, *measure_state(client, scene, parameters, work, fresh, log_dir))
-                for state, parameters, work, fresh in STATES]
+        return [(state.name, *measure_state(client, scenes.get(state.scene, state.scene),
+                                            state.parameters, state.work, state.fresh_cache,
+                                            log_dir))
+                for state in STATES]
     finally:
         client.close()
 
 
 def table(rows):
     """Markdown lines of the latency table, ms."""
-    lines = ['| state | parameter call [ms] | ~/pause [ms] | SIGTERM to exit [ms] |',
-             '| --- | --- | --- | --- |']
-    lines += [f'| {state} | {1e3 * asked:.1f} | {1e3 * paused:.1f} | {1e3 * stop:.0f} |'
-              for state, asked, paused, stop in rows]
+    lines = ['| state | parameter call p50 [ms] | p99 [ms] | ~/pause [ms] | exit status | '
+             'SIGTERM to exit [ms] |', '| --- | --- | --- | --- | --- | --- |']
+    for state, asked, paused, status, stop in rows:
+        p50, p99 = 1e3 * np.percentile(asked, [50, 99])
+        lines.append(f'| {state} | {p50:.1f} | {p99:.1f} | {1e3 * paused:.1f} | '
+                     f'{"none (killed)" if status is None else status} | {1e3 * stop:.0f} |')
     return lines

@@ -84,10 +84,11 @@ class TimedNode(RigidSimNode):
         self.tick_seconds = []
         super().__init__(**kwargs)   # its tick loop calls self._tick: the method below
 
-    def _tick(self, advance):
+    def _tick(self, advance, until=None):
         started = time.perf_counter()
-        super()._tick(advance)
+        done = super()._tick(advance, until)
         self.tick_seconds.append(time.perf_counter() - started)
+        return done
 
 
 def scene_text(n, wrench_input=None):
@@ -366,10 +367,16 @@ def report(results, seconds, starts=()):
         *goals(results)])
 
 
-def control_report(rows):
-    """Return the control-latency section: how it was measured and the table."""
+def control_report(rows, load=None):
+    """Return the control-latency section: how it was measured and the table.
+
+    ``load``: the machine's 1-minute load average at the start and the end of the run.
+    """
     machine = [line for line in bench.machine_description()
                if not line.startswith('- CPU time')]
+    if load is not None:
+        machine.append(f'- Load average (1 min) at the start and the end: {load[0]:.1f}, '
+                       f'{load[1]:.1f}')
     return '\n'.join([
         '### Control latency while the node works (promise: answers within 100 ms, a stop '
         'within 0.5 s)', *machine, f'- Command: `{bench.command_line()}`',
@@ -406,10 +413,15 @@ def main(args):
             results = run_configurations(chosen['configs'], args.integrators, log_dir, seconds)
             starts = run_starts(chosen['start_sizes'], log_dir)
         if chosen.get('control', True) and args.control:
-            scene = Path(log_dir, 'boxes_1000.yaml')
-            scene.write_text(scene_text(1000))
-            write(args.out, CONTROL_SECTION, control_report(
-                control_latency.measure(str(scene), log_dir)))
+            scenes = {}
+            for n in (1000, 5000, 20_000):
+                scenes[f'boxes_{n}'] = str(Path(log_dir, f'boxes_{n}.yaml'))
+                Path(scenes[f'boxes_{n}']).write_text(scene_text(n))
+            scenes['fast_rod'] = str(Path(log_dir, 'fast_rod.yaml'))
+            Path(scenes['fast_rod']).write_text(control_latency.FAST_ROD)
+            load = os.getloadavg()[0]
+            rows = control_latency.measure(scenes, log_dir)
+            write(args.out, CONTROL_SECTION, control_report(rows, (load, os.getloadavg()[0])))
     if not args.control_only:
         write(args.out, SECTION, report(results, seconds, starts))
     return results

@@ -130,17 +130,18 @@ class GoalSolver:
         self._rollouts = {}   # (body, unknowns, axes, copies) -> Rollout, this integrator's
         self._integrator = world.integrator
 
-    def solve(self, goal, path=False, start=None, jacobian=None):
+    def solve(self, goal, path=False, start=None, jacobian=None, restarts=True):
         """Return the :class:`GoalSolution` of ``goal``, or raise GoalRefused saying why.
 
         ``path``: also predict the body's motion (at most PATH_POSES states). ``start``
         (n,) and ``jacobian``: a first iterate and its Jacobian, as a re-solve from a
-        later state takes them; by default the current motion, corrected.
+        later state takes them; by default the current motion, corrected. ``restarts``
+        False tries ``start`` alone, so that a re-solve's work stays that of one start.
         """
         started = time.perf_counter()
         position, orientation = _check(self.world, goal)
         problem = GoalProblem(self, goal, position, orientation)
-        newton = self._converged(problem, start, jacobian)
+        newton = self._converged(problem, start, jacobian, restarts or start is None)
         final, trace = problem.verified(newton, path)
         errors = problem.errors(final)
         if max(e for e, aimed in zip(errors, problem.aims) if aimed) > ACCEPTED:
@@ -160,7 +161,7 @@ class GoalSolver:
                             problem.poses(trace))
 
     @staticmethod
-    def _converged(problem, start, jacobian):
+    def _converged(problem, start, jacobian, restarts=True):
         """Newton from ``start``, else the corrected current motion, else other starts.
 
         A local minimum of the residual holds the iterations of one start; the next may lie
@@ -170,9 +171,10 @@ class GoalSolver:
         """
         first = problem.first_iterate()
         starts = [] if start is None else [(start, jacobian)]
-        starts += [(first, None), (problem.current, None)]
-        draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
-        starts += [(first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
+        if restarts:
+            starts += [(first, None), (problem.current, None)]
+            draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
+            starts += [(first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
         for number, (values, known) in enumerate(starts):
             newton = Newton(problem, values, known)
             try:

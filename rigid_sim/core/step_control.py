@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from rigid_sim.core import safeguards
+from rigid_sim.core.integrators.adaptive import StepsCapped
 
 # A step with a non-finite result is retried in 2, 4, ... 2^MAX_HALVINGS times as many pieces.
 MAX_HALVINGS = 4
@@ -222,8 +223,13 @@ class StepController:
         """Count the failed attempt and retry in 2, 4, ... times the pieces; False if all fail.
 
         ``failed`` is what the attempt in ``substeps`` returned (a failure code or an error).
+        An attempt that ran into its method's cap on work (:class:`StepsCapped`) is not
+        retried: more pieces would take as many steps again, each capped.
         """
         pieces = substeps
+        if isinstance(failed, StepsCapped):
+            self._fail(time, dt, pieces, failed)
+            return False
         for _ in range(MAX_HALVINGS):
             self._fail(time, dt, pieces, failed)
             pieces <<= 1

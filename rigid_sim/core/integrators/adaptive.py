@@ -9,6 +9,12 @@ starve the second). The right-hand side is one compiled call. The error estimate
 internal step (the difference of the embedded fourth-order solution, which scipy's stepper
 computes to control the step) is reported per body in the units of
 :mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
+
+A tolerance far below what a motion allows (1e-12 on a fast-spinning rod) asks for millions
+of internal steps per call, seconds to minutes in one call that no executor round can
+interrupt. The internal steps of one call are capped (:data:`MAX_INTERNAL_STEPS`, fewer for
+a large world: :data:`INTERNAL_WORK` body-steps): past the cap the call gives up with
+:class:`StepsCapped`, the state kept, and says so.
 """
 import numpy as np
 
@@ -21,6 +27,22 @@ from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slope_of,
                                                        to_internal, to_public)
 from rigid_sim.core.kinematics import check_substep
+
+# Internal steps one call may take at most: scipy's stepper costs 0.2 ms a step for a few
+# bodies on this machine idle, 0.8 ms under a load of 10 (docs/performance.md, control
+# latency: 200 steps answered control in 160 ms there), so one call stays within about
+# 40 ms. The tests' tightest use (1e-10 over 0.05 s on one body) takes fewer.
+MAX_INTERNAL_STEPS = 50
+# Body-steps (internal steps times bodies) one call may take at most: the same bound where
+# the compiled right-hand side, not the stepper, is most of the cost.
+INTERNAL_WORK = 10_000
+
+
+class StepsCapped(ArithmeticError):
+    """A call of dopri5 would take more internal steps than its cap; the state is kept.
+
+    The step controller gives the step up at once (more pieces would only take more steps).
+    """
 
 
 @kernel
@@ -97,9 +119,12 @@ class Dopri5(Integrator):
         bodies = self.bodies
         self._work = (np.empty((bodies.count, 13)), np.empty((bodies.count, 3)), self._force,
                       self._torque)
+        self.cap = max(1, min(MAX_INTERNAL_STEPS, INTERNAL_WORK // max(1, bodies.count)))
+        self._left = self.cap   # internal steps the current call may still take
 
     def _advance(self, y, time, h, substeps, effects, continuing):
         self.error[:] = 0.0
+        self._left = self.cap
         for k in range(substeps):
             with np.errstate(all='ignore'):   # a non-finite result is handled, not warned
                 self._interval(y, time + k * h, h, effects)
@@ -128,6 +153,14 @@ class Dopri5(Integrator):
                                atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
         while solver.status == 'running':
+            if self._left == 0:
+                self._step_size = solver.h_abs   # where the next call starts again
+                raise StepsCapped(
+                    f'dopri5 capped at {self.cap} internal steps in a step of {dt:.3g} s, '
+                    f'{end - solver.t:.3g} s short of its end (tolerance {self.tolerance:.3g}, '
+                    f'internal step {solver.h_abs:.3g} s): the step is given up; a larger '
+                    'tolerance or time_step reaches it')
+            self._left -= 1
             message = solver.step()
             if solver.status == 'failed':
                 raise FloatingPointError(f'dopri5 failed: {message}')

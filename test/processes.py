@@ -1,0 +1,64 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Processes the tests start: each in a process group of its own, every group ended.
+
+A node process, or ``node_forks.py`` and the twenty nodes it forks, runs in its own session
+(``start_new_session``), so that killing its group ends whatever it started as well; killing
+the first process alone leaves forked children running. Every group :func:`start` makes is
+remembered: ``conftest.py`` ends those a test left (a finaliser that runs however the test
+ended), and the rest when the run ends, even after a timeout or an interrupt.
+"""
+import atexit
+import os
+import signal
+import subprocess
+
+EXIT_TIMEOUT = 60.0   # s: a killed group's first process is reaped within this, on any load
+_started = []         # every Popen started here, in order
+
+
+def start(command, **options):
+    """``subprocess.Popen(command, **options)`` in a new session; the Popen."""
+    process = subprocess.Popen(command, start_new_session=True, **options)
+    _started.append(process)
+    return process
+
+
+def started():
+    """Return how many processes have been started so far (a mark for :func:`end_since`)."""
+    return len(_started)
+
+
+def end(process):
+    """Kill ``process``'s whole group with SIGKILL and reap the process; its exit status.
+
+    Harmless when the process has ended already: what it forked may still be running in
+    its group.
+    """
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass   # nothing left in the group
+    try:
+        return process.wait(timeout=EXIT_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        return None
+
+
+def end_since(mark):
+    """End every group started since ``mark`` (see :func:`started`)."""
+    for process in _started[mark:]:
+        end(process)
+
+
+def alive(pid):
+    """Whether process ``pid`` exists and has not ended (a zombie has ended)."""
+    try:
+        with open(f'/proc/{pid}/stat') as stat:
+            state = stat.read().rpartition(')')[2].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state not in ('Z', 'X')
+
+
+atexit.register(end_since, 0)

@@ -1,0 +1,62 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The suite's own hygiene: the user's ROS_DOMAIN_ID is kept, no started process outlives a test.
+
+On a loaded machine a test that timed out once left twenty node processes running: killing
+``node_forks.py`` alone leaves the nodes it forked. Each process a test starts now has a
+process group of its own, which is killed however the test ends.
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import processes
+
+HERE = Path(__file__).parent
+FORKS = HERE / 'node_forks.py'
+START_TIMEOUT = 300.0   # s: two nodes importing and discovering on a loaded machine
+GONE_TIMEOUT = 60.0     # s: a liveness bound for the kernel to end a killed group
+
+
+def test_a_domain_id_the_user_set_is_kept():
+    """conftest.py gives a run its own domain only where the user set none."""
+    code = 'import os, conftest; print(os.environ["ROS_DOMAIN_ID"])'
+    run = subprocess.run([sys.executable, '-c', code], cwd=HERE, capture_output=True, text=True,
+                         env=dict(os.environ, ROS_DOMAIN_ID='215', PYTHONPATH=os.pathsep.join(
+                             [str(HERE), os.environ.get('PYTHONPATH', '')])), timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ['215']   # 215: not among the 1..101 conftest picks
+
+
+class Failed(Exception):
+    """What a test that failed half-way raises."""
+
+
+def test_a_test_that_fails_with_forked_nodes_running_leaves_none(tmp_path):
+    """Two nodes forked by node_forks.py, then a failure: the group is killed, all of it."""
+    namespace = f'/hygiene{os.getpid()}'
+    runs = [['-r', f'__ns:={namespace}/n{i}', '-p', 'rate:=100.0'] for i in range(2)]
+    forks = processes.start([sys.executable, str(FORKS), str(tmp_path), json.dumps(runs)],
+                            stdout=subprocess.PIPE, text=True)
+    pids = json.loads(forks.stdout.readline())
+    logs = [tmp_path / f'node{i}.log' for i in range(len(runs))]
+    with pytest.raises(Failed):
+        try:
+            deadline = time.monotonic() + START_TIMEOUT
+            while not all(log.exists() and 'simulating' in log.read_text() for log in logs):
+                assert time.monotonic() < deadline, 'the nodes did not start'
+                assert forks.poll() is None
+                time.sleep(0.05)
+            assert all(processes.alive(pid) for pid in pids)
+            raise Failed('half-way through')
+        finally:
+            processes.end(forks)
+    deadline = time.monotonic() + GONE_TIMEOUT
+    while any(processes.alive(pid) for pid in pids):
+        assert time.monotonic() < deadline, 'a forked node outlived its test'
+        time.sleep(0.05)
