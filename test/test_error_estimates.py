@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+import estimate_cases
 from physics_cases import FIXED_STEP
 from rigid_sim.bench import oracles
 from rigid_sim.core import step_control
@@ -254,3 +255,54 @@ def test_error_control_work_is_capped(monkeypatch):
     assert world.diagnostics.substeps == 20
     assert world.diagnostics.error_estimate > 1e-12
     assert 'capped at 20 substeps' in world.diagnostics.reason
+
+
+# Cases the estimates benchmark's sets do not hold, judged by an oracle with forces of its
+# own (estimate_cases): each method's estimate of a bare step against the true local error.
+ORACLE_STEPS = 4
+FLOOR = 1e-13   # scaled error below which estimate and truth are both round-off
+# Local errors beyond this are outside the regime an estimate is for (error control splits
+# the step long before); a diverging bare method reaches them.
+ASYMPTOTIC = 1e-3
+# Estimates measured beyond 10x above the truth, with the factor they stay within
+# (docs/accuracy.md, "Error estimates"): euler on the rod, whose explicit step turns the
+# unstable axis away at once (155x within its first steps); rk4's rate-scaled difference under
+# the damped spring (10.4 to 11.7x).
+OUTSIDE_BAND = {('euler', 'rod'): 200.0, ('rk4', 'pushed_damped'): 15.0}
+
+
+def oracle_pairs(key, name):
+    """Return (estimate, true error) of ORACLE_STEPS bare steps of the case ``key``.
+
+    Adaptive methods take an interval of ten of the case's steps, where they choose their own.
+    """
+    case = estimate_cases.CASES[key]
+    world = case.world(name)
+    dt = case.dt * (10 if REGISTRY[name].adaptive else 1)
+    pairs = []
+    for _ in range(ORACLE_STEPS):
+        start, time = world.y[0].copy(), world.time
+        assert world.step(dt)
+        pairs.append((world.integrator.error[0], case.true_error(start, world.y[0], dt, time)))
+    return pairs
+
+
+@pytest.mark.parametrize('key', sorted(estimate_cases.CASES))
+@pytest.mark.parametrize('name', sorted(REGISTRY))
+def test_estimate_tracks_the_oracle(key, name):
+    """Every estimate is within [0.1, 10] of the oracle's local error, bounds above 0.1.
+
+    Estimates that bound another method's error (``estimate_bounds``) must only never fall
+    below a tenth of the truth; two measured beyond 10x keep their factor (OUTSIDE_BAND). Where the truth is round-off (below FLOOR) the estimate must
+    be too.
+    """
+    bounds = REGISTRY[name].estimate_bounds
+    above = OUTSIDE_BAND.get((name, key), 10.0)
+    for estimate, true in oracle_pairs(key, name):
+        if true > ASYMPTOTIC:
+            continue
+        if true < FLOOR:
+            assert estimate < 10.0 * FLOOR, (estimate, true)
+            continue
+        assert estimate >= 0.1 * true, (estimate, true)
+        assert bounds or estimate <= above * true, (estimate, true)

@@ -24,8 +24,9 @@ Error estimate. A Strang step with a drift of ``h`` errs in position by ``h^3/6`
 rate of change of the acceleration (the Stormer-Verlet local error), which the two kicks
 around the drift measure: ``(h^2/6) (F_after - F_before) / M``; likewise the orientation by
 ``(h^2/6) I^-1 (tau_after - tau_before)``, an angle. Both are free: the kicks evaluate those
-wrenches anyway. The exact flow adds nothing (a body nothing torques has no error to
-estimate); the DLM drift adds its own leading local error, a closed form in ``L`` and the
+wrenches anyway. The exact flow adds only its round-off, which near the separatrix is
+far above the last place (:func:`~rigid_sim.core.integrators.free_rotation.flow_round_off`);
+the DLM drift adds its own leading local error, a closed form in ``L`` and the
 moments (:func:`dlm_error`), a polynomial that costs a fortieth of the exact flow; a drift
 that turns a body too far for that term to hold is compared with the exact flow instead.
 In a Yoshida composition the sub-steps' estimates add with their signs, as the errors they
@@ -45,7 +46,7 @@ from rigid_sim.core.effects.base import accumulate, acts_per_body, body_wrench
 from rigid_sim.core.error_estimate import (body_scales, quaternion_error, scaled_size,
                                            store_scales)
 from rigid_sim.core.integrators.base import Integrator
-from rigid_sim.core.integrators.free_rotation import free_flow
+from rigid_sim.core.integrators.free_rotation import flow_round_off, free_flow
 from rigid_sim.core.integrators.runge_kutta import (CLASSICAL_RK4, EXPLICIT_MIDPOINT,
                                                     FORWARD_EULER)
 from rigid_sim.core.integrators.substeps import substeps_checked
@@ -54,13 +55,14 @@ from rigid_sim.core.integrators.substeps import substeps_checked
 YOSHIDA_OUTER = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
 YOSHIDA_INNER = 1.0 - 2.0 * YOSHIDA_OUTER
 DLM_DRIFT, EXACT_DRIFT = 0, 1   # which free rotation a kernel drifts with
-# The widest turn about one axis in a DLM drift, |h| max |L_i / I_i| (rad), up to which the
-# drift's error is estimated by its leading term (:func:`dlm_error`). There the term came
-# within a factor 2.2 of the true error on the asymmetric bodies tried, and of 5 on a thin rod
-# (I = 1e-4, 1, 1.0001) where it passes through zero; beyond, the series it leads converges
-# slowly (that rod at 1 rad: 0.1 to 12 times the truth), and the drift is compared with the
-# exact flow (five times the cost of the drift). dlm's step guard keeps its drifts below
-# 0.045 rad; dlm4's sub-drifts reach 0.49.
+# The largest ``|h| |L| / min I`` (rad) of a DLM drift up to which its error is estimated by
+# its leading term (:func:`dlm_error`); beyond, the drift is compared with the exact flow (five
+# times the cost of the drift). The terms the leading one omits carry a further ``1 / I_k``
+# each, so the turn that bounds them is the total momentum over the smallest moment, not the
+# turn about any one axis: a thin rod (I = 1e-4, 1, 1.0001) spun at 100 rad/s about its middle
+# axis turns 0.1 rad a millisecond about it, yet its leading term was 0.002 to 0.007 of the
+# true error there (|h| |L| / I_1 = 1000). Below the bound the term came within a factor 2.2
+# of the true error on the asymmetric bodies tried.
 LEADING_TERM_ANGLE = 0.1
 
 
@@ -134,13 +136,13 @@ def dlm_error(inverse_moments, momentum, q, h):
 def _dlm_drift(moments, momentum, q, h):
     """:func:`dlm_rotation` for ``h``, and its local error (``L_b`` and ``q`` tuples).
 
-    The leading term (:func:`dlm_error`) while no axis turns by more than
+    The leading term (:func:`dlm_error`) while ``|h| |L| / min I`` is at most
     LEADING_TERM_ANGLE, else the difference to the exact flow.
     """
     turned, q_turned = dlm_rotation(moments, momentum, q, h)
     inverse = (1.0 / moments[0], 1.0 / moments[1], 1.0 / moments[2])
-    widest = abs(h) * max(abs(momentum[0]) * inverse[0], abs(momentum[1]) * inverse[1],
-                          abs(momentum[2]) * inverse[2])
+    widest = abs(h) * math.sqrt(kin.dot(momentum, momentum)) * max(inverse[0], inverse[1],
+                                                                   inverse[2])
     if widest <= LEADING_TERM_ANGLE:
         return turned, q_turned, dlm_error(inverse, momentum, q, h)
     exact_momentum, exact_q = free_flow(moments, momentum, q, h)
@@ -167,6 +169,8 @@ def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift):
     momentum = kin.rotate_inverse(kin.matrix(q), big_l)
     error_l, error_q = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)
     if drift == EXACT_DRIFT:
+        # Its round-off, a size: it stands in the quaternion's slot, where it shows (a turn).
+        error_q = (0.0, 0.0, 0.0, flow_round_off(moments, momentum))
         momentum, q = free_flow(moments, momentum, q, h)
     else:
         momentum, q, (error_l, error_q) = _dlm_drift(moments, momentum, q, h)
@@ -508,6 +512,7 @@ class YoshidaComposition:
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
     estimate_order = 3
+    estimate_bounds = True   # an h^4 estimate of an h^5 error
 
 
 class DLM4(YoshidaComposition, DLM):
