@@ -39,11 +39,6 @@ from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.integrators.elliptic_flow import (elliptic_working, separatrix_gap,
                                                       shape_constants)
 
-# The round-off of one call of the elliptic flow, in units of eps / mc: the state fixes mc only
-# to relative eps / mc. On a thin rod (I = 1e-4, 1, 1.0001) spun about its middle axis, mc =
-# 1e-6, one call erred 5e-11 to 7e-10 (scaled, against DOP853 at rtol 1e-13): 0.2 to 3 eps/mc.
-ROUND_OFF_EPSILONS = 1.0
-EPSILON = float(np.finfo(float).eps)
 # Moments closer than this (relative) are treated as equal: a few ulps, where the closed form
 # errs by ~1e-14 of the angle turned; the elliptic form stays ~1e-12 accurate down to 1e-14 gaps.
 SYMMETRY_RTOL = 1e-14
@@ -226,30 +221,3 @@ def _asymmetric(order, s, m, time):
     p = _matrix_quaternion(frame)
     return (kin.rotate_inverse(frame, m_working),
             kin.multiply(kin.multiply(kin.conjugate(p), core), p))
-
-
-@helper
-def flow_round_off(moments, m):
-    """Scaled error round-off leaves in :func:`free_flow` of ``m``: ``eps / mc``, at most 1.
-
-    ``moments`` and ``m`` as for :func:`free_flow`. The elliptic flow errs by the conditioning
-    of its parameter, ``eps / mc`` (the module's "Precision"), in orientation and in ``m``
-    relative to ``|L|``; near the separatrix that is far above the last place. The closed
-    forms (symmetric bodies, a pure spin about the intermediate axis) and zero ``L`` err by
-    the last place: 0.
-    """
-    i_scale = max(moments[0], max(moments[1], moments[2]))
-    m_scale = max(abs(m[0]), max(abs(m[1]), abs(m[2])))
-    if m_scale == 0.0:
-        return 0.0
-    order = _sorted_axes(moments)
-    s = (moments[order[0]] / i_scale, moments[order[1]] / i_scale, moments[order[2]] / i_scale)
-    w = (m[order[0]] / m_scale, m[order[1]] / m_scale, m[order[2]] / m_scale)
-    if (s[1] - s[0] <= SYMMETRY_RTOL * s[2] or s[2] - s[1] <= SYMMETRY_RTOL * s[2]
-            or (w[0] == 0.0 and w[2] == 0.0)):
-        return 0.0
-    if separatrix_gap(s, w) < 0.0:   # m circles the minor axis: it is the working axis 3
-        s, w = (s[2], s[1], s[0]), (w[2], w[1], w[0])
-    below = w[1] ** 2 * (s[1] - s[0]) / s[1] + w[2] ** 2 * (s[2] - s[0]) / s[2]
-    mc = (s[2] - s[0]) * separatrix_gap(s, w) / (below * (s[2] - s[1]))
-    return min(1.0, ROUND_OFF_EPSILONS * EPSILON / max(mc, EPSILON))

@@ -5,8 +5,8 @@
 Each case is one body (its centre of mass at its frame's origin) built twice: as a core
 World from the core's effects and inputs, and as the wrench :mod:`rigid_sim.bench.oracles`
 writes from the physics, so the oracle's motion shares no force code with the core. None
-is a case of the estimates benchmark's stability or accuracy sets.
-Imported by the test modules as ``import estimate_cases``.
+is a case of the stability or accuracy sets; ``rigid_sim_bench estimates`` runs them too
+(``est_<key>``), the tests (test/test_error_estimates.py) against the oracle's own forces.
 """
 from dataclasses import dataclass
 
@@ -36,6 +36,7 @@ class EstimateCase:
     q0: tuple                # (x, y, z, w), body to world
     omega0: tuple            # rad/s, body axes
     dt: float                # s
+    title: str = ''
     springs: tuple = ()      # (stiffness, damping, body point, anchor)
     field: tuple = None      # uniform acceleration, m/s^2
     world_force: tuple = None   # (force, body point): held in world axes
@@ -97,21 +98,23 @@ TILTED = tuple(TURN.as_quat())
 CASES = {case.key: case for case in (
     # A thin rod spun about its middle axis, a little off it: the axis it leaves is unstable.
     EstimateCase('rod', 1.0, (1e-4, 1.0, 1.0001), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
-                 (0.0, 0.0, 0.0, 1.0), (0.0, 100.0, 0.1), 1e-3),
+                 (0.0, 0.0, 0.0, 1.0), (0.0, 100.0, 0.1), 1e-3,
+                 'thin rod I = (1e-4, 1, 1.0001), omega (0, 100, 0.1), dt 1e-3'),
     # Two moments a millionth apart: the elliptic flow's parameter is nearly degenerate.
     EstimateCase('near_symmetric', 1.0, (0.5, 0.5000005, 0.2), (0.0, 0.0, 0.0),
-                 (0.0, 0.0, 0.0), TILTED, (1.0, -2.0, 6.0), 1e-2),
+                 (0.0, 0.0, 0.0), TILTED, (1.0, -2.0, 6.0), 1e-2,
+                 'near-symmetric top I = (0.5, 0.5000005, 0.2), dt 1e-2'),
     # A spinning top whose tip a stiff spring holds at the origin, under gravity.
     EstimateCase('heavy_top', 2.0, (0.05, 0.05, 0.02), (0.1, 0.0, 0.3), (0.0, 0.0, 0.0),
                  tuple(Rotation.from_rotvec([0.3, 0.0, 0.0]).as_quat()), (0.5, 0.0, 40.0),
-                 2e-3, springs=((2e4, 0.0, (0.0, 0.0, -0.3), (0.0, 0.0, 0.0)),),
+                 2e-3, 'heavy top on a pivot spring, gravity, dt 2e-3', springs=((2e4, 0.0, (0.0, 0.0, -0.3), (0.0, 0.0, 0.0)),),
                  field=tuple(GRAVITY)),
     # A force held in world axes at a body point, a damped spring to an off-centre anchor.
     EstimateCase('pushed_damped', 1.5, (0.4, 0.7, 0.9), (0.5, 0.2, -0.1), (0.3, -0.2, 0.1),
-                 TILTED, (1.0, -3.0, 2.0), 1e-2,
+                 TILTED, (1.0, -3.0, 2.0), 1e-2, 'world force at a point, damped spring, dt 1e-2',
                  springs=((60.0, 1.5, (0.2, 0.1, -0.1), (0.0, 0.3, 0.0)),),
                  world_force=((0.0, 4.0, -10.0), (0.15, -0.1, 0.05))),
     # A torque held in body axes, spinning the body up about a tilted axis.
     EstimateCase('body_torque', 1.0, (1.0, 2.0, 3.0), (0.0, 0.0, 0.0), (0.2, 0.0, 0.0),
-                 TILTED, (0.3, 4.0, 0.2), 1e-2, torque=(0.5, -1.0, 2.0)),
+                 TILTED, (0.3, 4.0, 0.2), 1e-2, 'torque held in body axes, dt 1e-2', torque=(0.5, -1.0, 2.0)),
 )}
