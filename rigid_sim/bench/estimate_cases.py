@@ -44,7 +44,7 @@ class EstimateCase:
 
     @property
     def inertia(self):
-        """Return the inertia (3, 3), body axes, kg m^2."""
+        """Return the body-axes inertia matrix: shape (3, 3), kg m^2."""
         return np.diag(self.moments)
 
     def world(self, integrator, error_control=False, tolerance=1e-6):
@@ -107,7 +107,8 @@ CASES = {case.key: case for case in (
     # A spinning top whose tip a stiff spring holds at the origin, under gravity.
     EstimateCase('heavy_top', 2.0, (0.05, 0.05, 0.02), (0.1, 0.0, 0.3), (0.0, 0.0, 0.0),
                  tuple(Rotation.from_rotvec([0.3, 0.0, 0.0]).as_quat()), (0.5, 0.0, 40.0),
-                 2e-3, 'heavy top on a pivot spring, gravity, dt 2e-3', springs=((2e4, 0.0, (0.0, 0.0, -0.3), (0.0, 0.0, 0.0)),),
+                 2e-3, 'heavy top on a pivot spring, gravity, dt 2e-3',
+                 springs=((2e4, 0.0, (0.0, 0.0, -0.3), (0.0, 0.0, 0.0)),),
                  field=tuple(GRAVITY)),
     # A force held in world axes at a body point, a damped spring to an off-centre anchor.
     EstimateCase('pushed_damped', 1.5, (0.4, 0.7, 0.9), (0.5, 0.2, -0.1), (0.3, -0.2, 0.1),
@@ -116,5 +117,6 @@ CASES = {case.key: case for case in (
                  world_force=((0.0, 4.0, -10.0), (0.15, -0.1, 0.05))),
     # A torque held in body axes, spinning the body up about a tilted axis.
     EstimateCase('body_torque', 1.0, (1.0, 2.0, 3.0), (0.0, 0.0, 0.0), (0.2, 0.0, 0.0),
-                 TILTED, (0.3, 4.0, 0.2), 1e-2, 'torque held in body axes, dt 1e-2', torque=(0.5, -1.0, 2.0)),
+                 TILTED, (0.3, 4.0, 0.2), 1e-2, 'torque held in body axes, dt 1e-2',
+                 torque=(0.5, -1.0, 2.0)),
 )}
