@@ -297,8 +297,8 @@ def test_estimate_tracks_the_oracle(key, name):
 
     Estimates that bound another method's error (``estimate_bounds``) must only never fall
     below a tenth of the truth; one measured beyond 10x keeps its factor (OUTSIDE_BAND); what
-    an estimate declares it omits stays below the level measured (OMITTED). Where the truth is round-off (below FLOOR) the estimate must
-    be too.
+    an estimate declares it omits stays below the level measured (OMITTED). Where the truth
+    is round-off (below FLOOR) the estimate must be too.
     """
     bounds = REGISTRY[name].estimate_bounds
     above = OUTSIDE_BAND.get((name, key), 10.0)
