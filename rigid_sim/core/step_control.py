@@ -19,7 +19,7 @@ count that aims at :data:`ERROR_TARGET` of it, and then holds that count (whatev
 would give back) until the estimate has fallen by :data:`~safeguards.KEEP_MARGIN` below it.
 Between the two the count stays: a count that followed an estimate hovering at the aim flipped
 with the orbit, and each flip of a symplectic method's step costs it the modified energy it
-keeps (docs/stability.md, "Error control and the long run").
+keeps (docs/stability.md, "Error control holds its count too").
 """
 import math
 from dataclasses import dataclass
