@@ -3,7 +3,8 @@
 """``rigid_sim_bench estimates``: every integrator's local error estimate against the truth.
 
 Each case (the hard cases of :mod:`rigid_sim.bench.stability`, the accuracy cases of
-:mod:`rigid_sim.bench.cases` at one step) runs through each integrator. At ticks spread over
+:mod:`rigid_sim.bench.cases` at one step, the cases of :mod:`rigid_sim.bench.estimate_cases`)
+runs through each integrator. At ticks spread over
 the run, the step taken from the world's own state is compared with the reference from that
 same state over the same ``dt``: DOP853 (:func:`rigid_sim.bench.oracles.reference_motion`,
 rtol 1e-13, atol 1e-14 of each component's scale) whose wrench is the world's own effect sum
@@ -25,7 +26,7 @@ import numpy as np
 
 from rigid_sim import bench
 from rigid_sim.bench import cases as accuracy_cases
-from rigid_sim.bench import oracles, stability
+from rigid_sim.bench import estimate_cases, oracles, stability
 from rigid_sim.core.error_estimate import true_errors
 from rigid_sim.core.integrators import REGISTRY
 from rigid_sim.core.state import Snapshot
@@ -39,6 +40,7 @@ ROUND_OFF_ULPS = 8
 FACTOR = 10.0         # an estimate within this factor of the truth either way is good
 TOLERANCES = (1e-6, 1e-4)
 ACCURACY_DT = 1e-2    # s, the step the accuracy cases run at
+ESTIMATE_STEPS = 100  # steps of each case of rigid_sim.bench.estimate_cases
 CONTROLLED_STEPS = 200  # an error-controlled run stops after this many steps
 ORACLE_RTOL = 1e-13
 ORACLE_ATOL = 1e-14   # times each component's scale
@@ -67,7 +69,9 @@ def probes():
     hard = [Probe(c.key, c.title, c.dt, c.duration,
                   lambda name, c=c: c.build(name, False)) for c in stability.CASES]
     return hard + [Probe('acc_' + c.key, c.title, ACCURACY_DT, c.duration,
-                         lambda name, c=c: c.build(name)) for c in accuracy_cases.CASES]
+                         lambda name, c=c: c.build(name)) for c in accuracy_cases.CASES] + [
+        Probe('est_' + c.key, c.title, c.dt, ESTIMATE_STEPS * c.dt,
+              lambda name, c=c: c.world(name)) for c in estimate_cases.CASES.values()]
 
 
 PROBES = {probe.key: probe for probe in probes()}
@@ -192,14 +196,19 @@ def flag(values):
     return OVER if values.max() > FACTOR else GOOD
 
 
-def ratio_cell(run):
-    """Markdown cell: median [min, max] of the run's ratios, the flag unless good, gaps."""
+def ratio_cell(run, bounds=False):
+    """Markdown cell: median [min, max] of the run's ratios, the flag unless good, gaps.
+
+    ``bounds``: the method declares its estimate an upper bound (``estimate_bounds``), so an
+    overestimate reads "over, bound".
+    """
     values = ratios(run)
     verdict = flag(values)
     cell = ROUND_OFF
     if verdict != ROUND_OFF:
         cell = f'{np.median(values):.2g} [{values.min():.2g}, {values.max():.2g}]'
-        cell = {UNDER: f'**{cell} UNDER**', OVER: f'{cell} over', GOOD: cell}[verdict]
+        over = f'{cell} over, bound' if bounds else f'{cell} over'
+        cell = {UNDER: f'**{cell} UNDER**', OVER: over, GOOD: cell}[verdict]
     return cell + missing(run)
 
 
@@ -338,9 +347,11 @@ def report(bare, control, keys, methods, plot_link, seconds, samples=SAMPLES):
         f'{FLOOR:g} or {ROUND_OFF_ULPS} units in the last place of the position in sizes, '
         'whichever is larger; ticks where both are below it are left out. **UNDER**: some '
         f'tick\'s estimate is more than {FACTOR:g} times below the truth; over: more than '
-        f'{FACTOR:g} times above. Reference: DOP853 (rtol {ORACLE_RTOL:g}) from the same '
+        f'{FACTOR:g} times above (", bound": the method declares its estimate an upper bound). '
+        f'Reference: DOP853 (rtol {ORACLE_RTOL:g}) from the same '
         'state over the same dt, its wrench the world\'s own effect sum.',
-        matrix(keys, methods, lambda m, k: ratio_cell(bare[m, k])),
+        matrix(keys, methods,
+               lambda m, k: ratio_cell(bare[m, k], REGISTRY[m].estimate_bounds)),
         '### Silent underestimates (worst tick)', underestimates(bare)]
     for tolerance in TOLERANCES:
         parts += [f'### Error control at tolerance {tolerance:g}: largest true error / '

@@ -96,3 +96,112 @@ def reference_motion(mass, inertia, start, times, wrench=no_wrench, rtol=TOLERAN
 def world_from_body(q):
     """Return the rotation matrix (3, 3) of a quaternion (x, y, z, w), body to world."""
     return Rotation.from_quat(q).as_matrix()
+
+
+# Wrenches written here from the physics alone, so that the tests judge the core's effects
+# and inputs with forces of their own. Each is ``wrench(time, x, v, q, omega_body) ->
+# (force, torque_body)`` as :func:`rigid_body_slope` takes it; body points are relative to
+# the centre of mass.
+def spring_at(stiffness, point, anchor, damping=0.0):
+    """Return the wrench of a zero-length spring from body ``point`` to the world ``anchor``.
+
+    ``-k d - c d'``, ``d`` the end's offset from the anchor (world, m) and ``d'`` its
+    velocity ``v + R (omega_b x point)``; ``stiffness`` N/m, ``damping`` N s/m.
+    """
+    point, anchor = np.asarray(point, dtype=float), np.asarray(anchor, dtype=float)
+
+    def wrench(time, x, v, q, omega_body):
+        turn = world_from_body(q)
+        force = (-stiffness * (x + turn @ point - anchor)
+                 - damping * (v + turn @ np.cross(omega_body, point)))
+        return force, np.cross(point, turn.T @ force)
+    return wrench
+
+
+def uniform_field(mass, acceleration):
+    """Return the wrench of a uniform field (gravity): ``mass acceleration``, no torque."""
+    force = mass * np.asarray(acceleration, dtype=float)
+
+    def wrench(time, x, v, q, omega_body):
+        return force, np.zeros(3)
+    return wrench
+
+
+def world_force_at(force, point):
+    """Return the wrench of a constant world-axes ``force`` (N) acting at body ``point`` (m)."""
+    force, point = np.asarray(force, dtype=float), np.asarray(point, dtype=float)
+
+    def wrench(time, x, v, q, omega_body):
+        return force, np.cross(point, world_from_body(q).T @ force)
+    return wrench
+
+
+def body_torque(torque):
+    """Return the wrench of a torque held in body axes (N m), no force."""
+    torque = np.asarray(torque, dtype=float)
+
+    def wrench(time, x, v, q, omega_body):
+        return np.zeros(3), torque
+    return wrench
+
+
+def summed(*wrenches):
+    """Return the wrench that is the sum of ``wrenches``."""
+    def wrench(time, x, v, q, omega_body):
+        parts = [w(time, x, v, q, omega_body) for w in wrenches]
+        return sum(f for f, _ in parts), sum(t for _, t in parts)
+    return wrench
+
+
+# The simulator's packed state of one body with its centre of mass at its frame's origin:
+# ``[x, q, P, L]`` (13,), P = M v and L = R I omega_b in world axes (docs/conventions.md).
+def packed(mass, inertia, x, v, q, omega_body):
+    """Return the packed state (13,) of ``x``, ``v``, ``q``, ``omega_body`` (oracle order)."""
+    spin = world_from_body(q) @ np.asarray(inertia, dtype=float) @ omega_body
+    return np.concatenate((x, q, mass * np.asarray(v), spin))
+
+
+def packed_step(mass, inertia, y, dt, wrench=no_wrench, start=0.0):
+    """Return the packed state (13,) ``dt`` after ``y`` (13,), at time ``start`` (s), by DOP853.
+
+    At rtol 1e-13 and an absolute tolerance 1e-14 of each component's scale
+    (:func:`scales`), far below the local errors the tests compare.
+    """
+    inertia = np.asarray(inertia, dtype=float)
+    q = y[3:7] / np.linalg.norm(y[3:7])
+    omega_body = np.linalg.solve(inertia, world_from_body(q).T @ y[10:13])
+    length, momentum, angular = scales(mass, inertia, y, dt)
+    scale = np.repeat([length, momentum / mass, 1.0, angular / np.diag(inertia).max()],
+                      [3, 3, 4, 3])
+
+    def shifted(time, x, v, q, omega_body):
+        return wrench(start + time, x, v, q, omega_body)
+    x, v, q, omega = reference_motion(mass, inertia, (y[:3], y[7:10] / mass, q, omega_body),
+                                      [dt], shifted, 1e-13, 1e-14 * scale)
+    return packed(mass, inertia, x[-1], v[-1], q[-1], omega[-1])
+
+
+def scales(mass, inertia, y, dt):
+    """Return a body's sizes: radius of gyration (m), momentum and angular momentum scales.
+
+    The units local errors are measured in: ``sqrt(trace I / M)``, ``max(|P|, M r / dt)``
+    and ``max(|L|, trace I / dt)`` of the packed state ``y`` (13,) for a step ``dt``.
+    """
+    trace = float(np.trace(inertia))
+    length = np.sqrt(trace / mass)
+    return (length, max(np.linalg.norm(y[7:10]), mass * length / dt),
+            max(np.linalg.norm(y[10:13]), trace / dt))
+
+
+def scaled_error(mass, inertia, reference, y, dt):
+    """Return the largest component of ``y - reference`` (packed, (13,)) over its scale.
+
+    Scales are the reference's (:func:`scales`); a quaternion counts with the reference's
+    sign (q and -q are one rotation), its components unscaled.
+    """
+    length, momentum, angular = scales(mass, inertia, reference, dt)
+    sign = 1.0 if y[3:7] @ reference[3:7] >= 0.0 else -1.0
+    return max(np.abs(y[:3] - reference[:3]).max() / length,
+               np.abs(sign * y[3:7] - reference[3:7]).max(),
+               np.abs(y[7:10] - reference[7:10]).max() / momentum,
+               np.abs(y[10:13] - reference[10:13]).max() / angular)

@@ -107,6 +107,7 @@ class Dopri5(Integrator):
     adaptive = True
     bound = safeguards.UNBOUNDED   # its error control chooses the internal steps
     estimate_order = 4             # the embedded fourth-order solution's error, h^5
+    estimate_bounds = True         # of the fourth-order solution: the fifth is kept
     evaluations_per_step = 0       # counted as they happen
 
     def __init__(self, system, tolerance=1e-6):

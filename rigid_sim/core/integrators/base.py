@@ -30,6 +30,12 @@ class Integrator:
     name = ''
     order = 0          # global order of accuracy
     adaptive = False   # True: ``tolerance`` controls the error, not ``dt``
+    # True: the estimate is an embedded lower-order method's error, an upper bound that may
+    # exceed the method's own error many times (docs/accuracy.md, "Error estimates").
+    estimate_bounds = False
+    # What the estimate leaves out, in words ('' for nothing the tests found): the error it
+    # does not see, measured (docs/accuracy.md, "Error estimates").
+    estimate_omits = ''
     # bound: the largest step it takes unsplit, a safeguards.StepBound that every method
     # declares for itself (registration refuses one that does not).
     evaluations_per_step = 1       # wrench evaluations of one step

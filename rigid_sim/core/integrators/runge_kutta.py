@@ -459,6 +459,7 @@ class RK4World(ExplicitRungeKutta):
     # Its error feeds back through q into omega, faster than the stages' rate shows (on a
     # thin rod 35 times the rate-scaled estimate): the embedded difference bounds it.
     rated = False
+    estimate_bounds = True
     estimate_order = 3
 
 
