@@ -132,8 +132,7 @@ class GoalInput:
             raise ValueError(f'the goal time {at!r} s is less than a tick after {now!r} s')
         position, orientation = conversions.pose_arrays(message.pose)
         wanted = self._scene.bodies[index].goal
-        return Goal(index, position, orientation, now + ticks * tick, wanted['unknowns'],
-                    wanted['axes'])
+        return Goal(index, position, orientation, now + ticks * tick, **wanted)
 
     def _start(self, index, message, settings):
         try:

@@ -16,7 +16,7 @@ from rigid_sim.core.body_state import body_frame_state, with_twist
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.goal_newton import Newton
 from rigid_sim.core.goal_problem import GoalProblem
-from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver
+from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver, MAX_SPEED, MAX_SPIN
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
 
 T = 2.0   # s from now to every goal
@@ -87,7 +87,9 @@ def test_a_ballistic_flight_under_gravity_starts_at_the_closed_form_velocity():
     world = sphere_world([0.0, 0.0, 0.0], [0.2, 0.0, 0.0],
                          effects=[lambda bodies: Gravity(bodies, G)])
     target = np.array([2.0, 1.0, 0.5])
-    goal = Goal(0, target, [0.0, 0.0, 0.0, 1.0], T, unknowns='linear')
+    # The sphere keeps its spin: it is turned 0.2 T about x then, as the goal must say.
+    turned = Rotation.from_rotvec([0.2 * T, 0.0, 0.0]).as_quat()
+    goal = Goal(0, target, turned, T, unknowns='linear')
     solution = GoalSolver(world).solve(goal)
     assert np.allclose(solution.linear_velocity, target / T - G * T / 2, rtol=0, atol=1e-12)
     assert np.allclose(solution.angular_velocity, [0.2, 0.0, 0.0], rtol=0, atol=1e-15)
@@ -260,8 +262,9 @@ def test_goals_out_of_reach_or_malformed_are_refused_with_the_reason():
 def test_a_scene_body_names_its_goal_unknowns():
     wrenched = dict(BOX, goal={'unknowns': 'wrench', 'axes': 'body'})
     scene = parse_scene({'bodies': [wrenched, dict(BOX, name='plain')]})
-    assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body'}
-    assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world'}
+    limits = {'max_speed': MAX_SPEED, 'max_spin': MAX_SPIN}
+    assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body', **limits}
+    assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world', **limits}
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: .*wrench_input'):
         parse_scene({'bodies': [dict(BOX, wrench_input=False, goal={'unknowns': 'wrench'})]})
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: expected one of'):
