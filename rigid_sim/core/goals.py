@@ -50,6 +50,7 @@ BRANCH_ITERATIONS = 15   # a stage, of a start on another branch or of the conti
 # The continuation from the current motion's end to the goal: its first stage, and the
 # smallest (a fraction of the way) before it gives up for the other starts.
 CONTINUATION_STAGE = 0.25
+CONTINUED = ('twist', 'angular')   # the unknowns whose solutions branch with the spin
 SMALLEST_STAGE = 1.0 / 32.0
 SAME_START = 0.05
 SAME_SOLUTION = 1e-9
@@ -230,20 +231,28 @@ class GoalSolver:
     def _nearest(self, problem):
         """Newton on the branches of whole turns; the solution nearest the current motion.
 
-        The first solution comes from the corrected current motion (or the other starts,
-        :meth:`_converged`). Its neighbours a whole turn away about the candidate axes
+        The first solutions come from the continuation of the current motion
+        (:meth:`_continued`, twist and angular unknowns) and from the corrected current
+        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges). Its neighbours a whole turn away about the candidate axes
         (``problem.whole_turns``) are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried.
         """
         first = problem.first_iterate()
-        try:
-            best = self._continued(problem)
-        except NoConvergence:
-            best = self._converged(problem, _starts(problem, first))
+        found = []
+        for solve in (self._continued, lambda p: self._converged(p, [(first, None)])):
+            if solve is self._continued and problem.goal.unknowns not in CONTINUED:
+                continue
+            try:
+                found.append(solve(problem))
+            except NoConvergence:
+                pass
+        if not found:
+            found = [self._converged(problem, _starts(problem, first)[1:])]
+        best = min(found, key=lambda newton: problem.distance(newton.values))
         nearest = problem.distance(best.values)
-        seen = [best.values]
-        candidates = [first] + [first + shift for shift in problem.whole_turns(first, first)]
+        seen = [newton.values for newton in found] + [first]
+        candidates = [first + shift for shift in problem.whole_turns(first, first)]
         candidates += [best.values + shift for shift in problem.whole_turns(best.values, first)]
         for _ in range(BRANCH_STARTS):
             candidates = [c for c in candidates if not _near_any(problem, c, seen)]
