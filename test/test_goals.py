@@ -317,7 +317,7 @@ def oracle_pose(effects, linear, angular, until=T, pose=(np.array([0.3, 0.0, 0.5
 
 
 def change_size(change, orientation=(0.0, 0.0, 0.0, 1.0)):
-    """The metric of "nearest": sqrt(m |dv|^2 + dw . I dw) of a twist change of the box.
+    """Return the metric of "nearest", sqrt(m |dv|^2 + dw . I dw), of a box twist change.
 
     Its centre of mass is its origin, so this is the square root of twice the kinetic
     energy of the change's impulse, the norm the solver states.

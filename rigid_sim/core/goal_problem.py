@@ -194,7 +194,7 @@ class GoalProblem:
         return float(np.sqrt(max(change @ self.metric @ change, 0.0)))
 
     def whole_turns(self, values, first):
-        """Changes (K, n) of the unknowns that add a whole turn at the goal's time.
+        """Return changes (K, n) of the unknowns that add a whole turn at the goal's time.
 
         The orientation at the goal's time is periodic in the spin: a free body spinning
         ``omega`` reaches the same orientation spinning ``omega + 2 pi k a / T`` about its

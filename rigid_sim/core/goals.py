@@ -139,7 +139,7 @@ def _coarse_to_fine(problem, newton, bound=None, iterations=MAX_ITERATIONS):
 
 
 def _starts(problem, first):
-    """Starts of the first solve: ``first``, the current motion, then seeded draws.
+    """Return the starts of the first solve: ``first``, the current motion, seeded draws.
 
     A start that ends in a local minimum of the residual is followed by the current motion
     as it is, then RESTARTS draws around the corrected one (seeded, so a goal solved twice
@@ -233,8 +233,9 @@ class GoalSolver:
 
         The first solutions come from the continuation of the current motion
         (:meth:`_continued`, twist and angular unknowns) and from the corrected current
-        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges). Its neighbours a whole turn away about the candidate axes
-        (``problem.whole_turns``) are tried next, nearest start first, and the walk goes on
+        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges).
+        Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
+        are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried.
         """
