@@ -16,6 +16,7 @@ def test_quick_goals_benchmark_solves_every_case_both_ways(tmp_path, capsys):
     for row in rows:
         assert int(row[2]) == QUICK
         assert 0 <= int(row[3]) <= QUICK   # nearest: of the solved
-        assert float(row[5]) <= 1e-9   # the worst solved target's final error, m or rad
+        assert float(row[4]) >= 1.0   # the worst ratio of distances starts at the known one
+        assert float(row[6]) <= 1e-9   # the worst solved target's final error, m or rad
     assert f'<!-- {SECTION}: begin -->' in out.read_text()
     assert (tmp_path / PLOT_NAME).read_bytes()[:4] == b'\x89PNG'

@@ -157,6 +157,7 @@ class Row:
 
     solved: int = 0
     nearest: int = 0         # solved no farther than the known change, by the metric
+    farther: float = 1.0     # the largest distance of a solution over the known one's
     errors: list = None      # max(position m, orientation rad) per target
     counts: list = None      # iterations (ours) or residual evaluations (baseline)
     seconds: list = None     # CPU seconds per solve
@@ -170,7 +171,7 @@ def run_case(case, targets, rng):
                if case.baseline or method is ours}
     for method in methods.values():   # compile and build the copies before timing
         method(solver, draw_targets(case, 1, rng)[0][0])
-    rows = {name: Row(0, 0, [], [], []) for name in methods}
+    rows = {name: Row(0, 0, 1.0, [], [], []) for name in methods}
     for goal, known in draw_targets(case, targets, rng):
         problem = GoalProblem(solver, goal, np.asarray(goal.position), goal.orientation)
         for name, method in methods.items():
@@ -181,14 +182,17 @@ def run_case(case, targets, rng):
             error = np.inf if values is None else max(final_errors(case, goal, values))
             row.errors.append(error)
             row.solved += error <= ACCEPTED
-            row.nearest += bool(error <= ACCEPTED and problem.distance(values)
-                                <= (1.0 + NEAREST_SLACK) * problem.distance(known))
+            if error <= ACCEPTED:
+                ratio = problem.distance(values) / problem.distance(known)
+                row.nearest += bool(ratio <= 1.0 + NEAREST_SLACK)
+                row.farther = max(row.farther, ratio)
     return rows
 
 
 def table(results, targets):
     """Markdown: a row per case and method."""
-    header = ['case', 'method', f'solved (of {targets})', 'nearest', 'final error, median',
+    header = ['case', 'method', f'solved (of {targets})', 'nearest', 'distance / known, worst',
+              'final error, median',
               'final error, worst solved', 'iterations or evaluations, median',
               'CPU median [ms]', 'CPU p99 [ms]']
     lines = []
@@ -196,7 +200,7 @@ def table(results, targets):
         for name, row in rows.items():
             errors = np.array(row.errors)
             solved = errors[errors <= ACCEPTED]
-            lines.append([key, name, row.solved, row.nearest,
+            lines.append([key, name, row.solved, row.nearest, f'{row.farther:.3g}',
                           bench.scientific(float(np.median(errors))),
                           bench.scientific(float(solved.max())) if solved.size else '-',
                           f'{np.median(row.counts):g}',
