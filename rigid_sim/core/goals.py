@@ -7,15 +7,19 @@ simulations (SIGGRAPH 2000), the unknowns are what a user may change now: the bo
 (both parts, or the linear or angular part alone) or a constant wrench held until the
 goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them from flights
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
-forward differences of copies of the body flown together in one compiled call. Its first
-iterate is the current motion corrected by the smallest move that closes the gap it would
-leave, so of the solutions that differ by whole turns the one nearest the current motion is
-found. The equations are :mod:`~rigid_sim.core.goal_problem`'s.
+forward differences of copies of the body flown together in one compiled call. Of the
+solutions it finds (by continuation from the current motion, from the current motion
+corrected by the least move that closes its gap, and on the branches a whole turn away) it
+takes the nearest to the current motion by the impulse norm of
+:meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
+equations are :mod:`~rigid_sim.core.goal_problem`'s.
 
 A solution is reported with its errors (m, rad), iterations, wall time and the Jacobian's
 condition; a goal that cannot be reached within the scene's limits (a wrench above
-``max_force`` or ``max_torque``, a motion the step guard cannot resolve, no convergence) is
-refused with :class:`GoalRefused` saying why, and nothing changes.
+``max_force`` or ``max_torque``, a twist above the goal's ``max_speed`` or ``max_spin``, a
+motion the step guard cannot resolve, no convergence, any part of the pose left more than
+ACCEPTED from the goal) is refused with :class:`GoalRefused` saying why, and nothing
+changes.
 """
 import time
 from dataclasses import dataclass
