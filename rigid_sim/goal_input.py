@@ -43,8 +43,7 @@ from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
 from rigid_sim.core.goal_flight import free_under_exact_flow, snapshot
-from rigid_sim.core.goal_newton import MAX_ITERATIONS
-from rigid_sim.core.goals import RESTARTS, Goal, GoalSolver
+from rigid_sim.core.goals import Goal, GoalSolver, WORST_FLIGHTS
 from rigid_sim.core.text import shown
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 
@@ -53,10 +52,6 @@ DEMAND_REFRESH = 0.5   # s of wall time between two looks for new goal publisher
 # about 10 ms of flights of one body's copies on this machine; a solve that may fly more
 # runs in the worker thread.
 INLINE_WORK = 20_000
-# Flights a solve may fly at worst: MAX_ITERATIONS Newton iterations from each start (the
-# given one, the corrected and the current motion, RESTARTS draws), each iteration at least
-# one flight, twice over where a coarse flight comes first.
-WORST_FLIGHTS = 2 * MAX_ITERATIONS * (RESTARTS + 3)
 CHASES = 3             # times a goal whose re-anchor failed goes back to the worker
 WARNING_PERIOD = 2.0   # s of wall time between two warnings about refused goals
 
@@ -169,8 +164,7 @@ class GoalInput:
             raise ValueError(f'the goal time {at!r} s is less than a tick after {now!r} s')
         position, orientation = conversions.pose_arrays(message.pose)
         wanted = self._scene.bodies[index].goal
-        return Goal(index, position, orientation, now + ticks * tick, wanted['unknowns'],
-                    wanted['axes'])
+        return Goal(index, position, orientation, now + ticks * tick, **wanted)
 
     def _start(self, index, message, settings):
         try:
@@ -237,8 +231,7 @@ class GoalInput:
             return
         try:   # re-anchored: from the world as it is now, near the worker's solution
             solution = self._solver_for(settings).solve(
-                goal, path=True, start=outcome.values, jacobian=outcome.jacobian,
-                restarts=False)
+                goal, path=True, start=outcome.values, jacobian=outcome.jacobian)
         except ValueError as error:   # GoalRefused is a ValueError
             self._chase(goal, settings, (outcome.values, outcome.jacobian), chases, error)
             return

@@ -15,6 +15,8 @@ def test_quick_goals_benchmark_solves_every_case_both_ways(tmp_path, capsys):
         (case, method) for case in DEFAULT_CASES for method in ('GoalSolver', 'least_squares')]
     for row in rows:
         assert int(row[2]) == QUICK
-        assert float(row[4]) <= 1e-9   # the worst solved target's final error, m or rad
+        assert 0 <= int(row[3]) <= QUICK   # nearest: of the solved
+        assert float(row[4]) >= 1.0   # the worst ratio of distances starts at the known one
+        assert float(row[6]) <= 1e-9   # the worst solved target's final error, m or rad
     assert f'<!-- {SECTION}: begin -->' in out.read_text()
     assert (tmp_path / PLOT_NAME).read_bytes()[:4] == b'\x89PNG'

@@ -100,7 +100,7 @@ def test_a_goal_stamped_zero_is_due_goal_horizon_seconds_later(rigid_sim):
     sim = rigid_sim(yaml=SCENE, time_step=DT, goal_horizon=0.5)
     user = User(sim, 'plate')
     sim.step(3)
-    user.goal(at=0.0)
+    user.goal(at=0.0, position=np.zeros(3))   # angular unknowns: where the plate stays
     sim.step(1)
     status = values(user.statuses[-1])
     assert status['unknowns'] == 'angular' and float(status['arrival [s]']) == 0.53

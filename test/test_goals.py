@@ -12,11 +12,12 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 import physics_cases
+from rigid_sim.bench import oracles
 from rigid_sim.core.body_state import body_frame_state, with_twist
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.goal_newton import Newton
 from rigid_sim.core.goal_problem import GoalProblem
-from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver
+from rigid_sim.core.goals import ACCEPTED, Goal, GoalRefused, GoalSolver, MAX_SPEED, MAX_SPIN
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
 
 T = 2.0   # s from now to every goal
@@ -87,7 +88,9 @@ def test_a_ballistic_flight_under_gravity_starts_at_the_closed_form_velocity():
     world = sphere_world([0.0, 0.0, 0.0], [0.2, 0.0, 0.0],
                          effects=[lambda bodies: Gravity(bodies, G)])
     target = np.array([2.0, 1.0, 0.5])
-    goal = Goal(0, target, [0.0, 0.0, 0.0, 1.0], T, unknowns='linear')
+    # The sphere keeps its spin: it is turned 0.2 T about x then, as the goal must say.
+    turned = Rotation.from_rotvec([0.2 * T, 0.0, 0.0]).as_quat()
+    goal = Goal(0, target, turned, T, unknowns='linear')
     solution = GoalSolver(world).solve(goal)
     assert np.allclose(solution.linear_velocity, target / T - G * T / 2, rtol=0, atol=1e-12)
     assert np.allclose(solution.angular_velocity, [0.2, 0.0, 0.0], rtol=0, atol=1e-15)
@@ -260,9 +263,149 @@ def test_goals_out_of_reach_or_malformed_are_refused_with_the_reason():
 def test_a_scene_body_names_its_goal_unknowns():
     wrenched = dict(BOX, goal={'unknowns': 'wrench', 'axes': 'body'})
     scene = parse_scene({'bodies': [wrenched, dict(BOX, name='plain')]})
-    assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body'}
-    assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world'}
+    limits = {'max_speed': MAX_SPEED, 'max_spin': MAX_SPIN}
+    assert scene.bodies[0].goal == {'unknowns': 'wrench', 'axes': 'body', **limits}
+    assert scene.bodies[1].goal == {'unknowns': 'twist', 'axes': 'world', **limits}
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: .*wrench_input'):
         parse_scene({'bodies': [dict(BOX, wrench_input=False, goal={'unknowns': 'wrench'})]})
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.unknowns: expected one of'):
         parse_scene({'bodies': [dict(BOX, goal={'unknowns': 'spin'})]})
+
+
+# The oracle: the box's Newton-Euler equations by DOP853 (rigid_sim.bench.oracles, which
+# imports nothing of the core) with the forces written here, from the scene's definitions.
+BOX_INERTIA = 2.0 / 12.0 * np.diag([0.3 ** 2 + 0.4 ** 2, 0.2 ** 2 + 0.4 ** 2,
+                                    0.2 ** 2 + 0.3 ** 2])   # kg m^2, a 2 kg box's
+ORACLE_TOLERANCE = 1e-13
+
+
+def oracle_wrench(effects):
+    """Return ``wrench(t, x, v, q, omega_body)`` of a scene's gravity, damping and springs.
+
+    Gravity ``m g``; damping ``-c_lin P`` and ``-c_ang L``; an anchored spring of rest
+    length 0 pulls its body point ``p`` by ``-k (p - anchor) - c dp/dt``, torque
+    ``(p - x) x f``. The box's centre of mass is its frame's origin.
+    """
+    gravity = np.array(effects.get('gravity', {}).get('acceleration', np.zeros(3)))
+    damping = effects.get('damping', {'linear': 0.0, 'angular': 0.0})
+    springs = effects.get('springs', [])
+
+    def wrench(time, x, v, q, omega_body):
+        force = 2.0 * gravity - damping['linear'] * 2.0 * v
+        torque = -damping['angular'] * BOX_INERTIA @ omega_body
+        turn = Rotation.from_quat(q)
+        for spring in springs:
+            lever = turn.apply(spring['point'])
+            velocity = v + turn.apply(np.cross(omega_body, spring['point']))
+            pull = -spring['stiffness'] * (x + lever - spring['anchor']) \
+                - spring['damping'] * velocity
+            force = force + pull
+            torque = torque + turn.inv().apply(np.cross(lever, pull))
+        return force, torque
+    return wrench
+
+
+def oracle_pose(effects, linear, angular, until=T, pose=(np.array([0.3, 0.0, 0.5]),
+                                                         np.array([0.0, 0.0, 0.0, 1.0]))):
+    """Return the box's origin (3,) and orientation (4,) at ``until`` after a start twist."""
+    position, q = pose
+    omega_body = Rotation.from_quat(q).inv().apply(angular)
+    x, _, orientation, _ = oracles.reference_motion(
+        2.0, BOX_INERTIA, (position, linear, q, omega_body), [0.0, until],
+        oracle_wrench(effects), rtol=ORACLE_TOLERANCE, atol=ORACLE_TOLERANCE)
+    return x[-1], orientation[-1]
+
+
+def change_size(change, orientation=(0.0, 0.0, 0.0, 1.0)):
+    """Return the metric of "nearest", sqrt(m |dv|^2 + dw . I dw), of a box twist change.
+
+    Its centre of mass is its origin, so this is the square root of twice the kinetic
+    energy of the change's impulse, the norm the solver states.
+    """
+    inertia = Rotation.from_quat(orientation).as_matrix()
+    inertia = inertia @ BOX_INERTIA @ inertia.T
+    return float(np.sqrt(2.0 * change[:3] @ change[:3] + change[3:] @ inertia @ change[3:]))
+
+
+# Twist changes of a box spinning (10, 15, 15) rad/s whose torque-free goals 2 s on have
+# several solutions a whole turn apart: the known change is the nearest one (or nearly).
+SPINNING = dict(BOX, twist={'linear': [0.1, 0.0, 0.0], 'angular': [10.0, 15.0, 15.0]})
+BRANCH_CHANGES = {
+    'a': [-0.405407, 0.376122, 0.126723, 0.447942, -0.172608, -0.740909],
+    'b': [-0.062796, 0.334577, 0.609422, 0.191465, -0.437861, -0.757159],
+}
+
+
+@pytest.mark.parametrize('case', sorted(BRANCH_CHANGES))
+def test_of_the_solutions_a_whole_turn_apart_none_nearer_than_the_known_one_is_passed(case):
+    """An oracle's target on a fast tumble: reached, by a change no larger than the known."""
+    change = np.array(BRANCH_CHANGES[case])
+    twist = np.array([0.1, 0.0, 0.0, 10.0, 15.0, 15.0]) + change
+    goal = Goal(0, *oracle_pose({}, twist[:3], twist[3:]), T)
+    solution = GoalSolver(scene_world(bodies=[SPINNING])).solve(goal)
+    solved = np.concatenate((solution.linear_velocity, solution.angular_velocity))
+    # The oracle flies the solution to the goal too (the exact flow matches it to 1e-10).
+    reached, turned = oracle_pose({}, solved[:3], solved[3:])
+    assert np.linalg.norm(reached - goal.position) < 1e-9
+    assert physics_cases.rotation_error(turned, goal.orientation) < 1e-8
+    assert change_size(solved - twist + change) <= change_size(change) * (1.0 + 1e-6)
+
+
+ORACLE_CASES = {   # effects, time step, goal time, twist change
+    'gravity': ({'gravity': {'acceleration': G.tolist()}}, None, T,
+                [0.4, -0.3, 0.2, 0.3, -0.4, 0.2]),
+    'damping': ({'damping': {'linear': 0.5, 'angular': 0.3}}, 1e-3, T,
+                [0.3, -0.2, 0.1, 0.2, -0.3, 0.1]),
+    'springs': ({'springs': [SPRING]}, 1e-3, T, [0.3, -0.2, 0.1, 0.2, -0.3, 0.1]),
+}
+
+
+@pytest.mark.parametrize('case', sorted(ORACLE_CASES))
+def test_a_target_the_oracle_flew_to_is_reached_by_the_known_twist_or_a_nearer_one(case):
+    """The world's discrete flight differs from the oracle's by its step's error only.
+
+    The solution reaches the oracle's target in the world's own flight (1e-9), so it is
+    the known twist up to that error (1e-6 at dt 1e-3 over 2 s), and no farther.
+    """
+    effects, step, until, change = ORACLE_CASES[case]
+    base = np.array([0.1, 0.0, 0.0, 1.0, 2.0, 3.0])
+    twist = base + change
+    goal = Goal(0, *oracle_pose(effects, twist[:3], twist[3:], until), until)
+    solution = GoalSolver(scene_world(effects), step).solve(goal)
+    assert max(solution.position_error, solution.orientation_error) <= ACCEPTED
+    solved = np.concatenate((solution.linear_velocity, solution.angular_velocity))
+    assert np.allclose(solved, twist, rtol=0.0, atol=1e-5 if step else 1e-9)
+    assert change_size(solved - base) <= change_size(np.array(change)) + 1e-5
+
+
+def test_a_pose_the_unknowns_cannot_reach_is_refused_with_what_is_left():
+    """Angular unknowns do not move a box's centre: a goal 2.8 m off its path is refused."""
+    world = scene_world()
+    drifted = np.array([0.3, 0.0, 0.5]) + T * np.array([0.1, 0.0, 0.0])   # x0 + v0 T
+    goal = Goal(0, drifted + [0.0, 2.8, 0.0], [0.0, 0.0, 0.0, 1.0], T, unknowns='angular')
+    assert 'cannot reach the goal pose' in (reason := refusal(world, goal))
+    assert '2.8 m' in reason
+    reached = GoalSolver(world).solve(dict_goal(goal, position=drifted))
+    assert reached.position_error <= ACCEPTED
+
+
+def dict_goal(goal, **changes):
+    """Return ``goal`` with ``changes``."""
+    return Goal(**{**goal.__dict__, **changes})
+
+
+def test_a_goal_beyond_the_speed_limit_is_refused_with_the_speed_it_needs():
+    """1e9 m in 2 s needs 5e8 m/s: refused at the default limit, solved when raised."""
+    world = sphere_world(np.zeros(3), np.zeros(3))
+    far = Goal(0, np.array([1e9, 0.0, 0.0]), [0.0, 0.0, 0.0, 1.0], T)
+    reason = refusal(world, far)
+    assert 'max_speed' in reason and '5e+08 m/s' in reason
+    spin = Goal(0, np.zeros(3), Rotation.from_rotvec([3.0, 0.0, 0.0]).as_quat(), T,
+                max_spin=1.0)
+    assert 'max_spin' in refusal(world, spin) and '1.5 rad/s' in refusal(world, spin)
+    raised = GoalSolver(world).solve(dict_goal(far, max_speed=1e9))
+    assert np.allclose(raised.linear_velocity, far.position / T, rtol=1e-12)
+    scene = parse_scene({'bodies': [dict(BOX, goal={'max_speed': 3.0, 'max_spin': 4.0})]})
+    assert (scene.bodies[0].goal['max_speed'], scene.bodies[0].goal['max_spin']) == (3.0, 4.0)
+    with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.max_speed'):
+        parse_scene({'bodies': [dict(BOX, goal={'max_speed': -1.0})]})

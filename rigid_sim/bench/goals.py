@@ -2,13 +2,16 @@
 # SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench goals``: solving goals, against scipy's least_squares, in one run.
 
-Per case, random reachable targets: the pose at T = 2 s of the body flown by the World
-itself (``World.step``) after a random change of its twist (or a random wrench held). Each
-is solved from the unchanged body by :class:`rigid_sim.core.goals.GoalSolver` and by
-``scipy.optimize.least_squares`` (Levenberg-Marquardt, two-point differences) over the
-same one-copy flights, from the same first iterate. Both solutions are then flown by a
-fresh World, whose distance from the target is the final error; solved means within 1e-9 m
-and 1e-9 rad. CPU time is ``time.process_time`` around each solve.
+Per case, random reachable targets: the pose at T (2 s, or the case's) of the body flown
+by the World itself (``World.step``) after a random change of its twist (or a random
+wrench held). Each is solved from the unchanged body by
+:class:`rigid_sim.core.goals.GoalSolver` and by ``scipy.optimize.least_squares``
+(Levenberg-Marquardt, two-point differences) over the same one-copy flights, from the same
+first iterate. Both solutions are then flown by a fresh World, whose distance from the
+target is the final error; solved means within 1e-9 m and 1e-9 rad. Nearest means no
+farther from the current motion than the known change that made the target, by the
+solver's metric (``GoalProblem.distance``), to 1e-6 of it. CPU time is
+``time.process_time`` around each solve.
 """
 import time
 from dataclasses import dataclass
@@ -45,6 +48,9 @@ class Case:
     time_step: float    # s; None: the whole flight is one step (exact free flow)
     unknowns: str = 'twist'
     spread: tuple = (0.5, 0.5)   # std. dev. of the twist change (m/s, rad/s) or wrench (N, N m)
+    horizon: float = HORIZON     # s from the start to the goal
+    spin: tuple = (1.0, 2.0, 3.0)   # rad/s, the box's angular velocity before the change
+    baseline: bool = True        # also solved by least_squares (too slow on long flights)
 
 
 CASES = (
@@ -59,37 +65,46 @@ CASES = (
          {'springs': [dict(SPRING, point=[0.05, 0.05, 0.05])]}, 1e-3),
     Case('wrench', 'gravity, unknowns a wrench held until T (world axes), dt 1e-3',
          {'gravity': {'acceleration': [0, 0, -9.81]}}, 1e-3, 'wrench', (1.0, 0.01)),
+    Case('spinning', 'torque-free box tumbling fast, at (10, 15, 15) rad/s (23.5): goals '
+         'with several solutions a whole turn apart, exact flow', {}, None,
+         spin=(10.0, 15.0, 15.0)),
+    Case('springs_long', 'the damped spring of `springs`, T = 10 s, dt 1e-2',
+         {'springs': [SPRING]}, 1e-2, horizon=10.0, baseline=False),
 )
 CASES_BY_KEY = {case.key: case for case in CASES}
-DEFAULT_CASES = ('tumbling', 'gravity', 'damping', 'springs', 'wrench')
+DEFAULT_CASES = ('tumbling', 'gravity', 'damping', 'springs', 'wrench', 'spinning')
 TARGETS = 200
 QUICK = 2   # targets of --quick
 
 
 def world_of(case):
     """Return a fresh World of the case's one-body scene, with exact_split."""
-    scene = {'effects': case.effects, 'bodies': [BOX]}
+    box = dict(BOX, twist={'linear': BOX['twist']['linear'], 'angular': list(case.spin)})
+    scene = {'effects': case.effects, 'bodies': [box]}
     return build_world(parse_scene(yaml.safe_load(yaml.safe_dump(scene))), 'exact_split')
 
 
 def fly(case, change):
-    """Return the body's final state (13,) after HORIZON with ``change``, by World.step.
+    """Return the body's final state (13,) after the horizon with ``change``, by World.step.
 
     ``change``: (6,) twist (origin velocity, angular velocity) or wrench (force, torque).
     """
     world = world_of(case)
     if case.unknowns == 'wrench':
-        world.inputs.hold(0, 'goal', 'world', change[:3], change[3:], expires=HORIZON)
+        world.inputs.hold(0, 'goal', 'world', change[:3], change[3:], expires=case.horizon)
     else:
         world.y = with_twist(world.bodies, world.y, 0, change[:3], change[3:])
-    steps = 1 if case.time_step is None else round(HORIZON / case.time_step)
+    steps = 1 if case.time_step is None else round(case.horizon / case.time_step)
     for _ in range(steps):
-        world.step(HORIZON / steps)
+        world.step(case.horizon / steps)
     return world.y[0]
 
 
 def draw_targets(case, count, rng):
-    """``count`` goals reached by random changes of the current twist (or a random wrench)."""
+    """``count`` (goal, known unknowns) reached by random changes of the current twist.
+
+    Or by a random wrench held.
+    """
     world = world_of(case)
     _, _, velocity, spin = body_frame_state(world.bodies, world.y, 0)
     base = np.zeros(6) if case.unknowns == 'wrench' else np.concatenate((velocity, spin))
@@ -97,7 +112,8 @@ def draw_targets(case, count, rng):
     for _ in range(count):
         change = base + np.repeat(case.spread, 3) * rng.normal(size=6)
         final = fly(case, change)   # the box's centre of mass is its frame's origin
-        goals.append(Goal(0, final[:3].copy(), final[3:7].copy(), HORIZON, case.unknowns))
+        goals.append((Goal(0, final[:3].copy(), final[3:7].copy(), case.horizon,
+                           case.unknowns), change))
     return goals
 
 
@@ -132,6 +148,7 @@ def baseline(solver, goal):
 
 
 METHODS = {'GoalSolver': ours, 'least_squares': baseline}
+NEAREST_SLACK = 1e-6   # relative: a solution this much farther than the known one is as near
 
 
 @dataclass
@@ -139,6 +156,8 @@ class Row:
     """What one method did on one case's targets."""
 
     solved: int = 0
+    nearest: int = 0         # solved no farther than the known change, by the metric
+    farther: float = 1.0     # the largest distance of a solution over the known one's
     errors: list = None      # max(position m, orientation rad) per target
     counts: list = None      # iterations (ours) or residual evaluations (baseline)
     seconds: list = None     # CPU seconds per solve
@@ -148,11 +167,14 @@ def run_case(case, targets, rng):
     """Rows of both methods on ``targets`` goals of ``case``, interleaved target by target."""
     world = world_of(case)
     solver = GoalSolver(world, case.time_step)
-    for method in METHODS.values():   # compile and build the copies before timing
-        method(solver, draw_targets(case, 1, rng)[0])
-    rows = {name: Row(0, [], [], []) for name in METHODS}
-    for goal in draw_targets(case, targets, rng):
-        for name, method in METHODS.items():
+    methods = {name: method for name, method in METHODS.items()
+               if case.baseline or method is ours}
+    for method in methods.values():   # compile and build the copies before timing
+        method(solver, draw_targets(case, 1, rng)[0][0])
+    rows = {name: Row(0, 0, 1.0, [], [], []) for name in methods}
+    for goal, known in draw_targets(case, targets, rng):
+        problem = GoalProblem(solver, goal, np.asarray(goal.position), goal.orientation)
+        for name, method in methods.items():
             values, count, seconds = method(solver, goal)
             row = rows[name]
             row.seconds.append(seconds)
@@ -160,12 +182,17 @@ def run_case(case, targets, rng):
             error = np.inf if values is None else max(final_errors(case, goal, values))
             row.errors.append(error)
             row.solved += error <= ACCEPTED
+            if error <= ACCEPTED:
+                ratio = problem.distance(values) / problem.distance(known)
+                row.nearest += bool(ratio <= 1.0 + NEAREST_SLACK)
+                row.farther = max(row.farther, ratio)
     return rows
 
 
 def table(results, targets):
     """Markdown: a row per case and method."""
-    header = ['case', 'method', f'solved (of {targets})', 'final error, median',
+    header = ['case', 'method', f'solved (of {targets})', 'nearest', 'distance / known, worst',
+              'final error, median',
               'final error, worst solved', 'iterations or evaluations, median',
               'CPU median [ms]', 'CPU p99 [ms]']
     lines = []
@@ -173,7 +200,8 @@ def table(results, targets):
         for name, row in rows.items():
             errors = np.array(row.errors)
             solved = errors[errors <= ACCEPTED]
-            lines.append([key, name, row.solved, bench.scientific(float(np.median(errors))),
+            lines.append([key, name, row.solved, row.nearest, f'{row.farther:.3g}',
+                          bench.scientific(float(np.median(errors))),
                           bench.scientific(float(solved.max())) if solved.size else '-',
                           f'{np.median(row.counts):g}',
                           f'{1e3 * np.median(row.seconds):.2f}',
@@ -187,7 +215,7 @@ def plot(path):
     matplotlib.use('Agg')
     from matplotlib import pyplot
     case = CASES_BY_KEY['springs']
-    goal = draw_targets(case, 1, np.random.default_rng(7))[0]
+    goal = draw_targets(case, 1, np.random.default_rng(7))[0][0]
     solution = GoalSolver(world_of(case), case.time_step).solve(goal, path=True)
     times, origins, orientations = solution.path
     figure, (left, right) = pyplot.subplots(1, 2, figsize=(11, 4))
@@ -227,9 +255,9 @@ def main(args):
     if args.out is not None:
         plot(args.out.parent / PLOT_NAME)
         link = PLOT_NAME
-    cases = '\n'.join(f'- `{case.key}`: {case.title}; targets from a change of '
-                      f'{"wrench" if case.unknowns == "wrench" else "twist"} with std. dev. '
-                      f'{case.spread[0]:g}, {case.spread[1]:g} per axis'
+    cases = '\n'.join(f'- `{case.key}`: {case.title}; targets {case.horizon:g} s ahead from '
+                      f'a change of {"wrench" if case.unknowns == "wrench" else "twist"} '
+                      f'with std. dev. {case.spread[0]:g}, {case.spread[1]:g} per axis'
                       for case in CASES if case.key in args.cases)
     parts = ['## Goals: solve time and accuracy', f'Command: `{bench.command_line()}`',
              '\n'.join(bench.machine_description()), cases, table(results, targets)]

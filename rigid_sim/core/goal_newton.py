@@ -27,6 +27,10 @@ class NoConvergence(GoalRefused):
     """The iterations did not reach the goal."""
 
 
+class LeftTheBound(NoConvergence):
+    """The iterates left the region where a solution was sought."""
+
+
 class Newton:
     """Iterates on ``problem`` from the unknowns ``start`` (n,), optionally with a Jacobian.
 
@@ -53,13 +57,13 @@ class Newton:
         residuals = self.problem.residuals(values + self._offsets)
         return residuals[0], (residuals[1:] - residuals[0]).T / steps
 
-    def converge(self, tolerance):
+    def converge(self, tolerance, bound=None, iterations=MAX_ITERATIONS):
         """Iterate until ``close_enough(residual, tolerance)``; the unknowns and iterations.
 
-        Raises NoConvergence after MAX_ITERATIONS more, or when no step reduces the
-        residual.
+        Raises NoConvergence after ``iterations`` more, or when no step reduces the
+        residual; LeftTheBound when ``bound(values)`` is false at an iterate.
         """
-        limit = self.iterations + MAX_ITERATIONS
+        limit = self.iterations + iterations
         if self.residual is None:
             if self.jacobian is None:
                 self.residual, self.jacobian = self.differences(self.values)
@@ -72,6 +76,8 @@ class Newton:
                 raise NoConvergence(f'no convergence in {self.iterations} iterations: '
                                     f'{self.describe()}')
             self._step()
+            if bound is not None and not bound(self.values):
+                raise LeftTheBound(f'the iterates left the region sought: {self.describe()}')
         return self.values, self.iterations
 
     def describe(self):

@@ -68,9 +68,8 @@ class GoalProblem:
     def __init__(self, solver, goal, position, orientation):
         world, index = solver.world, goal.body
         self.world, self.goal, self.index = world, goal, index
-        self.target = position, orientation
-        # q -> q_goal^-1 q as one matrix, the rotation error of many rows in one product.
-        self._aim = position, left_product(Rotation.from_quat(orientation).inv().as_quat()).T
+        self.aim_at(position, orientation)
+        self.goal_pose = self.target
         # A copy: Rotation.apply refuses a read-only array, which a scene's may be.
         self._lever = np.array(world.bodies.com_in_body[index], dtype=float)
         self.count, self.aims = UNKNOWNS[goal.unknowns]
@@ -94,6 +93,34 @@ class GoalProblem:
         self.batch = solver.rollout(index, goal.unknowns, goal.axes, self.count + 1)
         self.single = solver.rollout(index, goal.unknowns, goal.axes, 1)
         self.fly_on(self.fine if self.coarse is None else self.coarse)
+
+    def aim_at(self, position, orientation):
+        """Aim the residual at ``position`` (3,) and unit ``orientation`` (4,)."""
+        self.target = position, orientation
+        # q -> q_goal^-1 q as one matrix, the rotation error of many rows in one product.
+        self._aim = position, left_product(Rotation.from_quat(orientation).inv().as_quat()).T
+
+    def on_the_way(self, fraction):
+        """Return the pose a ``fraction`` of the way from the current motion's end to the goal.
+
+        The position on the straight line, the orientation on the shortest turn (slerp).
+        """
+        position, orientation = self.goal_pose
+        if fraction >= 1.0:
+            return position, orientation
+        end, turn = self._current_end()
+        gap = rotation_vector((left_product(orientation) @ turn.inv().as_quat())[None])[0]
+        return (end + fraction * (position - end),
+                (Rotation.from_rotvec(fraction * gap) * turn).as_quat())
+
+    def _current_end(self):
+        """Return where the current motion ends: origin (3,) m and Rotation."""
+        final, _ = self.single.fly(self.start_rows(self.current[None]),
+                                   self.current[None] if self.wrench else None)
+        if not np.isfinite(final).all():
+            raise GoalRefused('the flight of the current motion is not finite')
+        turn = Rotation.from_quat(final[0, 3:7])
+        return final[0, :3] - turn.apply(self._lever), turn
 
     def _coarse(self, held):
         """Return a flight of far fewer steps, or None: where a long flight's solve starts.
@@ -139,13 +166,71 @@ class GoalProblem:
         self.b = sum((columns[p] @ current[p] for p in fixed), np.zeros(6))
         self.current = (np.zeros(6) if self.wrench
                         else np.concatenate([current[p] for p in parts]))
-        self.turn, self.inertia, self.mass = turn, inertia, mass
+        self.turn, self.inertia, self.mass, self._lever_matrix = turn, inertia, mass, lever
         horizon = self.horizon
         if self.wrench:   # the displacement of a force or torque held for the horizon
             moment = np.trace(bodies.inertia_body[index]) / 3.0
             self.scale = 0.5 * horizon ** 2 / np.repeat([mass, moment], 3)
+            # The impulse of the wrench held for the horizon, world axes.
+            impulse = horizon * np.eye(6)
+            if self.goal.axes == 'body':
+                impulse[:3, :3], impulse[3:, 3:] = horizon * turn, horizon * turn
         else:
             self.scale = np.full(self.count, horizon)
+            impulse = self.a   # a change of twist is the impulse a @ change
+        # The metric of "nearest": |change|^2 = |dP|^2 / m + dL . I^-1 dL, twice the kinetic
+        # energy the change's impulse (dP, dL about the centre of mass) gives a body at rest.
+        energy = np.zeros((6, 6))
+        energy[:3, :3], energy[3:, 3:] = np.eye(3) / mass, np.linalg.inv(inertia)
+        self.metric = impulse.T @ energy @ impulse
+
+    def distance(self, values):
+        """Return how far the unknowns (n,) are from the current motion, sqrt(kg) m/s.
+
+        The square root of twice the kinetic energy the impulse of the change would give
+        the body at rest: the metric by which the solver takes the nearest solution.
+        """
+        change = values - self.current
+        return float(np.sqrt(max(change @ self.metric @ change, 0.0)))
+
+    def whole_turns(self, values, first):
+        """Return changes (K, n) of the unknowns that add a whole turn at the goal's time.
+
+        The orientation at the goal's time is periodic in the spin: a free body spinning
+        ``omega`` reaches the same orientation spinning ``omega + 2 pi k a / T`` about its
+        own axis ``a``, so the solutions lie on branches 2 pi / T apart. Other bodies' axes
+        drift from that, so both the solution's spin axis and its angular momentum's are
+        shifted along (and, for the first iterate, the axis of the turn it corrects).
+        Linear unknowns reach a position, which has no such branches: none.
+        """
+        if self.goal.unknowns == 'linear':
+            return np.zeros((0, self.count))
+        spin = values[-3:]
+        axes = [spin, self.inertia @ spin, first[-3:] - self.current[-3:]]
+        if self.wrench:   # the torque's axis, world axes, and the current spin's
+            axes = [self.turn @ spin if self.goal.axes == 'body' else spin, self._twist[1]]
+        shifts = []
+        for axis in axes:
+            size = np.linalg.norm(axis)
+            if not size > 0.0:
+                continue
+            turn = 2.0 * np.pi * axis / size
+            for k in (-1.0, 1.0):
+                shifts.append(self._turn_change(k * turn))
+        return np.array(shifts).reshape(-1, self.count)
+
+    def _turn_change(self, turn):
+        """Change (n,) of the unknowns that adds the rotation vector ``turn`` at arrival."""
+        if self.wrench:   # a torque held from rest turns by tau T^2 / (2 I)
+            torque = 2.0 * self.inertia @ turn / self.horizon ** 2
+            if self.goal.axes == 'body':
+                torque = self.turn.T @ torque
+            return np.concatenate((np.zeros(3), torque))
+        spin = turn / self.horizon
+        if self.goal.unknowns == 'angular':
+            return spin
+        # The centre of mass keeps its velocity: the origin's changes by -spin x (R c).
+        return np.concatenate((self._lever_matrix @ spin, spin))
 
     def start_rows(self, values):
         """Start rows (K, 13) of the body from unknowns (K, n)."""
@@ -211,13 +296,8 @@ class GoalProblem:
 
     def first_iterate(self):
         """Return the current motion corrected by the least move that closes its gap."""
-        final, _ = self.single.fly(self.start_rows(self.current[None]),
-                                   self.current[None] if self.wrench else None)
-        if not np.isfinite(final).all():
-            raise GoalRefused('the flight of the current motion is not finite')
-        turn = Rotation.from_quat(final[0, 3:7])
+        end, turn = self._current_end()
         position, orientation = self.target
-        end = final[0, :3] - turn.apply(self._lever)
         gap = position - end
         turn_gap = rotation_vector((left_product(orientation)
                                     @ turn.inv().as_quat())[None])[0]

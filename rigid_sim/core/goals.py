@@ -7,15 +7,19 @@ simulations (SIGGRAPH 2000), the unknowns are what a user may change now: the bo
 (both parts, or the linear or angular part alone) or a constant wrench held until the
 goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them from flights
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
-forward differences of copies of the body flown together in one compiled call. Its first
-iterate is the current motion corrected by the smallest move that closes the gap it would
-leave, so of the solutions that differ by whole turns the one nearest the current motion is
-found. The equations are :mod:`~rigid_sim.core.goal_problem`'s.
+forward differences of copies of the body flown together in one compiled call. Of the
+solutions it finds (by continuation from the current motion, from the current motion
+corrected by the least move that closes its gap, and on the branches a whole turn away) it
+takes the nearest to the current motion by the impulse norm of
+:meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
+equations are :mod:`~rigid_sim.core.goal_problem`'s.
 
 A solution is reported with its errors (m, rad), iterations, wall time and the Jacobian's
 condition; a goal that cannot be reached within the scene's limits (a wrench above
-``max_force`` or ``max_torque``, a motion the step guard cannot resolve, no convergence) is
-refused with :class:`GoalRefused` saying why, and nothing changes.
+``max_force`` or ``max_torque``, a twist above the goal's ``max_speed`` or ``max_spin``, a
+motion the step guard cannot resolve, no convergence, any part of the pose left more than
+ACCEPTED from the goal) is refused with :class:`GoalRefused` saying why, and nothing
+changes.
 """
 import time
 from dataclasses import dataclass
@@ -24,18 +28,46 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
-from rigid_sim.core.goal_newton import Newton, NoConvergence
+from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
 
-__all__ = ['ACCEPTED', 'UNKNOWNS', 'WRENCH_AXES', 'Goal', 'GoalRefused', 'GoalSolution',
-           'GoalSolver']
+__all__ = ['ACCEPTED', 'MAX_SPEED', 'MAX_SPIN', 'UNKNOWNS', 'WRENCH_AXES', 'Goal',
+           'GoalRefused', 'GoalSolution', 'GoalSolver']
 WRENCH_AXES = ('world', 'body')
-ACCEPTED = 1e-9   # m and rad: a solution further from the goal is refused
+ACCEPTED = 1e-9   # m and rad: a solution further from the goal, in any part, is refused
+# Defaults of a goal's speed limits (scene key ``goal: {max_speed, max_spin}``): m/s of the
+# body frame origin and rad/s of a solved twist. A goal far away is reached by a fast enough
+# motion whatever its distance; past these it is refused rather than flown at any speed.
+MAX_SPEED = 100.0
+MAX_SPIN = 100.0
 # Starts drawn around the first iterate after the first two fail: how many, how far (m or
 # rad of displacement at the goal's time, per unknown) and from which seed.
 RESTARTS = 8
 RESTART_SPREAD = 0.6
 RESTART_SEED = 20000
+# The branches of whole turns: starts tried after the first solution, at most; a start
+# predicted further than BRANCH_SLACK times the nearest solution's distance is not tried;
+# starts or solutions within SAME_START of each other (relative, by the metric) are one.
+BRANCH_STARTS = 6
+BRANCH_SLACK = 1.5
+BRANCH_ITERATIONS = 15   # a stage, of a start on another branch or of the continuation
+# The continuation from the current motion's end to the goal: its first stage, and the
+# smallest (a fraction of the way) before it gives up for the other starts.
+CONTINUATION_STAGE = 0.25
+CONTINUED = ('twist', 'angular')   # the unknowns whose solutions branch with the spin
+SMALLEST_STAGE = 1.0 / 32.0
+SAME_START = 0.05
+SAME_SOLUTION = 1e-9
+# The continuation's tries at most: stages never grow, so at most 1 / (SMALLEST_STAGE / 2)
+# succeed, and a stage halves at most log2(CONTINUATION_STAGE / SMALLEST_STAGE) + 1 times.
+CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
+                      + int(np.log2(CONTINUATION_STAGE / SMALLEST_STAGE)) + 1)
+# Flights a solve from no start may fly at worst, each iteration one flight, twice over
+# where a coarse flight comes first: the continuation, the corrected current motion, the
+# other starts (:func:`_starts`) and the branches of whole turns. The node decides by it
+# whether a goal is solved in the tick.
+WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
+                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
 
 
 @dataclass(frozen=True)
@@ -43,7 +75,9 @@ class Goal:
     """Where body ``body`` (its index) must be at simulated time ``at``, s.
 
     ``position`` (3,) m and ``orientation`` (4,) (x, y, z, w) of its frame in the world;
-    ``unknowns`` one of UNKNOWNS; ``axes`` of a wrench, 'world' or 'body'.
+    ``unknowns`` one of UNKNOWNS; ``axes`` of a wrench, 'world' or 'body'; a solved twist
+    faster than ``max_speed`` (m/s, the body frame origin) or ``max_spin`` (rad/s) is
+    refused.
     """
 
     body: int
@@ -52,6 +86,8 @@ class Goal:
     at: float
     unknowns: str = 'twist'
     axes: str = 'world'
+    max_speed: float = MAX_SPEED
+    max_spin: float = MAX_SPIN
 
 
 @dataclass(frozen=True)
@@ -97,20 +133,63 @@ def _check(world, goal):
     return position, orientation
 
 
-def _coarse_to_fine(problem, newton):
+def _coarse_to_fine(problem, newton, bound=None, iterations=MAX_ITERATIONS):
     """Near the solution on the coarse flight, then to it on the fine one.
 
     The coarse flight's own solution may lie beyond a fold its errors moved, so a coarse
-    solve that stops short still hands its iterate on to the fine flight.
+    solve that stops short still hands its iterate on to the fine flight (unless it left
+    the ``bound``).
     """
     problem.fly_on(problem.coarse)
     try:
-        newton.converge(COARSE_TOLERANCE)
+        newton.converge(COARSE_TOLERANCE, bound, iterations)
+    except LeftTheBound:
+        raise
     except NoConvergence:
         pass
     problem.fly_on(problem.fine)
     newton.residual = None
-    newton.converge(TOLERANCE)
+    newton.converge(TOLERANCE, bound, iterations)
+
+
+def _starts(problem, first):
+    """Return the starts of the first solve: ``first``, the current motion, seeded draws.
+
+    A start that ends in a local minimum of the residual is followed by the current motion
+    as it is, then RESTARTS draws around the corrected one (seeded, so a goal solved twice
+    is solved alike).
+    """
+    draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
+    return [(first, None), (problem.current, None)] + [
+        (first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
+
+
+def _near_any(problem, values, others):
+    """Whether ``values`` is within SAME_START of any of ``others``, by the metric."""
+    return any(problem.distance(values - other + problem.current) <= SAME_START
+               * max(problem.distance(values), problem.distance(other), 1e-12)
+               for other in others)
+
+
+def _check_speed(goal, linear, angular):
+    """Refuse a solved twist faster than the goal's limits."""
+    speed, spin = np.linalg.norm(linear), np.linalg.norm(angular)
+    if speed > goal.max_speed:
+        raise GoalRefused(f'the goal needs a speed of {speed:.3g} m/s, above the body\'s '
+                          f'goal max_speed {goal.max_speed:.3g} m/s')
+    if spin > goal.max_spin:
+        raise GoalRefused(f'the goal needs a spin of {spin:.3g} rad/s, above the body\'s '
+                          f'goal max_spin {goal.max_spin:.3g} rad/s')
+
+
+def _unreached(goal, problem, errors):
+    """Why a solution that leaves ``errors`` (m, rad) at the goal is refused."""
+    left = f'{errors[0]:.3g} m and {errors[1]:.3g} rad from the goal'
+    if all(problem.aims):
+        return f'no convergence: the flight ends {left}'
+    aimed = 'position' if problem.aims[0] else 'orientation'
+    return (f'{goal.unknowns} unknowns cannot reach the goal pose: the flight that best '
+            f'reaches its {aimed} ends {left} (residual above {ACCEPTED:g})')
 
 
 class GoalSolver:
@@ -130,23 +209,27 @@ class GoalSolver:
         self._rollouts = {}   # (body, unknowns, axes, copies) -> Rollout, this integrator's
         self._integrator = world.integrator
 
-    def solve(self, goal, path=False, start=None, jacobian=None, restarts=True):
+    def solve(self, goal, path=False, start=None, jacobian=None):
         """Return the :class:`GoalSolution` of ``goal``, or raise GoalRefused saying why.
 
         ``path``: also predict the body's motion (at most PATH_POSES states). ``start``
         (n,) and ``jacobian``: a first iterate and its Jacobian, as a re-solve from a
-        later state takes them; by default the current motion, corrected. ``restarts``
-        False tries ``start`` alone, so that a re-solve's work stays that of one start.
+        later state takes them, tried alone, so that a re-solve's work stays that of one
+        start and on its branch; by default the nearest solution (:meth:`_nearest`).
         """
         started = time.perf_counter()
         position, orientation = _check(self.world, goal)
         problem = GoalProblem(self, goal, position, orientation)
-        newton = self._converged(problem, start, jacobian, restarts or start is None)
+        if start is None:
+            newton = self._nearest(problem)
+        else:   # a re-solve from a later state keeps the branch its start was on
+            newton = self._converged(problem, [(start, jacobian)])
+        if not problem.wrench:
+            _check_speed(goal, *problem.twist(newton.values))
         final, trace = problem.verified(newton, path)
         errors = problem.errors(final)
-        if max(e for e, aimed in zip(errors, problem.aims) if aimed) > ACCEPTED:
-            raise GoalRefused(f'no convergence: the flight ends {errors[0]:.3g} m and '
-                              f'{errors[1]:.3g} rad from the goal')
+        if max(errors) > ACCEPTED:
+            raise GoalRefused(_unreached(goal, problem, errors))
         condition = newton.condition()
         if not (np.isfinite(condition) and np.isfinite(newton.values).all()):
             raise GoalRefused('the unknowns do not move the body (singular Jacobian)')
@@ -160,29 +243,104 @@ class GoalSolver:
                             newton.values.copy(), newton.jacobian.copy(),
                             problem.poses(trace))
 
-    @staticmethod
-    def _converged(problem, start, jacobian, restarts=True):
-        """Newton from ``start``, else the corrected current motion, else other starts.
+    def _nearest(self, problem):
+        """Newton on the branches of whole turns; the solution nearest the current motion.
 
-        A local minimum of the residual holds the iterations of one start; the next may lie
-        in another basin: the current motion as it is, then RESTARTS draws around the
-        corrected one (seeded, so a goal solved twice is solved alike). The last failure is
-        the refusal's reason.
+        The first solutions come from the continuation of the current motion
+        (:meth:`_continued`, twist and angular unknowns) and from the corrected current
+        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges).
+        Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
+        are tried next, nearest start first, and the walk goes on
+        from every nearer solution found, until no untried start is predicted within
+        BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried.
         """
         first = problem.first_iterate()
-        starts = [] if start is None else [(start, jacobian)]
-        if restarts:
-            starts += [(first, None), (problem.current, None)]
-            draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
-            starts += [(first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
+        found = []
+        for solve in (self._continued, lambda p: self._converged(p, [(first, None)])):
+            if solve is self._continued and problem.goal.unknowns not in CONTINUED:
+                continue
+            try:
+                found.append(solve(problem))
+            except NoConvergence:
+                pass
+        if not found:
+            found = [self._converged(problem, _starts(problem, first)[1:])]
+        best = min(found, key=lambda newton: problem.distance(newton.values))
+        nearest = problem.distance(best.values)
+        seen = [newton.values for newton in found] + [first]
+        candidates = [first + shift for shift in problem.whole_turns(first, first)]
+        candidates += [best.values + shift for shift in problem.whole_turns(best.values, first)]
+        for _ in range(BRANCH_STARTS):
+            candidates = [c for c in candidates if not _near_any(problem, c, seen)]
+            if not candidates:
+                break
+            candidates.sort(key=problem.distance)
+            values = candidates.pop(0)
+            if problem.distance(values) > BRANCH_SLACK * nearest:
+                break
+            seen.append(values)
+            reach = BRANCH_SLACK * nearest
+            try:
+                newton = self._converged(problem, [(values, None)],
+                                         lambda u: problem.distance(u) <= reach,
+                                         BRANCH_ITERATIONS)
+            except NoConvergence:
+                continue
+            distance = problem.distance(newton.values)
+            if distance < nearest * (1.0 - SAME_SOLUTION) and not _near_any(
+                    problem, newton.values, [best.values]):
+                best, nearest = newton, distance
+                candidates += [newton.values + shift
+                               for shift in problem.whole_turns(newton.values, first)]
+            seen.append(newton.values)
+        problem.fly_on(problem.fine)
+        return best
+
+    @staticmethod
+    def _continued(problem):
+        """Newton along the way from where the current motion ends to the goal.
+
+        The current motion is the solution for its own end; the target moves to the goal
+        in stages (halved where a stage fails), each solved from the last solution, so the
+        solution found is the one the current motion is continued into.
+        """
+        values, jacobian, done, stage = problem.current, None, 0.0, CONTINUATION_STAGE
+        flight = problem.coarse or problem.fine
+        try:
+            while done < 1.0:
+                reach = min(1.0, done + stage)
+                problem.aim_at(*problem.on_the_way(reach))
+                newton = Newton(problem, values, jacobian)
+                problem.fly_on(flight if reach < 1.0 else problem.fine)
+                try:
+                    newton.converge(COARSE_TOLERANCE if reach < 1.0 else TOLERANCE,
+                                    iterations=BRANCH_ITERATIONS)
+                except NoConvergence:
+                    if stage < SMALLEST_STAGE:
+                        raise
+                    stage /= 2.0
+                    continue
+                values, jacobian, done = newton.values, newton.jacobian, reach
+        finally:
+            problem.aim_at(*problem.goal_pose)
+        return newton
+
+    @staticmethod
+    def _converged(problem, starts, bound=None, iterations=MAX_ITERATIONS):
+        """Newton from the first of ``starts`` [(values, Jacobian or None)] that converges.
+
+        A local minimum of the residual holds the iterations of one start; the next may lie
+        in another basin. The last failure is the refusal's reason. ``bound`` and
+        ``iterations``: as ``Newton.converge`` takes them.
+        """
         for number, (values, known) in enumerate(starts):
             newton = Newton(problem, values, known)
             try:
                 if problem.coarse is not None and known is None:
-                    _coarse_to_fine(problem, newton)
+                    _coarse_to_fine(problem, newton, bound, iterations)
                 else:
                     problem.fly_on(problem.fine)
-                    newton.converge(TOLERANCE)
+                    newton.converge(TOLERANCE, bound, iterations)
                 return newton
             except NoConvergence:
                 if number + 1 == len(starts):

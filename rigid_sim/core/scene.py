@@ -18,7 +18,7 @@ import numpy as np
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects import REGISTRY as EFFECTS
-from rigid_sim.core.goals import UNKNOWNS, WRENCH_AXES
+from rigid_sim.core.goals import MAX_SPEED, MAX_SPIN, UNKNOWNS, WRENCH_AXES
 from rigid_sim.core.imu_spec import parse_imus
 from rigid_sim.core.inertia import MassProperties, check_inertia, shape_mass_properties
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
@@ -32,7 +32,8 @@ from rigid_sim.core.scene_limits import Budget, operator_limits, raise_note, WOR
 from rigid_sim.core.text import clipped, shown
 
 INERTIA_METHODS = ('exact', 'bounding_box', 'sampling', 'given')
-GOAL_DEFAULT = {'unknowns': 'twist', 'axes': 'world'}
+GOAL_DEFAULT = {'unknowns': 'twist', 'axes': 'world', 'max_speed': MAX_SPEED,
+                'max_spin': MAX_SPIN}
 
 
 class SceneError(ValueError):
@@ -57,7 +58,8 @@ class BodySpec:
     points: dict                      # name -> (3,) m, body-frame coordinates
     wrench_input: bool                # False: the body takes no applied wrenches
     imus: tuple = ()                  # of rigid_sim.core.imu_spec.ImuSpec, in file order
-    # What a goal for this body solves for: unknowns in goals.UNKNOWNS, axes of a wrench.
+    # What a goal for this body solves for: unknowns in goals.UNKNOWNS, axes of a wrench,
+    # and the speed limits of a solved twist (goals.Goal).
     goal: dict = dataclasses.field(default_factory=lambda: dict(GOAL_DEFAULT))
 
 
@@ -103,7 +105,9 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
         'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True),
         'imu': (raw, ABSENT),
         'goal': (table({'unknowns': (choice(*UNKNOWNS), GOAL_DEFAULT['unknowns']),
-                        'axes': (choice(*WRENCH_AXES), GOAL_DEFAULT['axes'])}), {})}
+                        'axes': (choice(*WRENCH_AXES), GOAL_DEFAULT['axes']),
+                        'max_speed': (positive, MAX_SPEED),
+                        'max_spin': (positive, MAX_SPIN)}), {})}
 SCENE = {'world_frame': (token, 'world'),
          'limits': (table({'max_force': (positive, DEFAULT_MAX_FORCE),
                            'max_torque': (positive, DEFAULT_MAX_TORQUE),

@@ -176,7 +176,7 @@ class Simulation:
         """
         index = self.node.world.bodies.index(body)
         wanted = self.node.scene.bodies[index].goal
-        goal = Goal(index, *pose, at, unknowns or wanted['unknowns'], wanted['axes'])
+        goal = Goal(index, *pose, at, **dict(wanted, unknowns=unknowns or wanted['unknowns']))
         return self.node.goals.solve_now(goal, self.node.settings)
 
     def step(self, ticks=1, timeout=STEP_TIMEOUT):
