@@ -11,7 +11,7 @@ seconds from now), rounded to the tick grid. At the next tick the goal is solved
 on ``~/<body>/goal_path`` (nav_msgs/Path) and the outcome, or the reason for a refusal, on
 /diagnostics. A refused goal changes nothing.
 
-A solve is Newton's method over flights of the world, from up to a dozen starts: its work
+A solve is Newton's method over flights of the world, from many starts: its work
 is the body-steps of one flight (steps times bodies) times the flights it may take, which
 no step count bounds. With a wall clock a goal is solved in the tick only where that worst
 case stays under ``INLINE_WORK`` (or the flight is free under the exact flow, exact at any
