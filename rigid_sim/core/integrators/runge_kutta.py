@@ -103,6 +103,7 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, estim
     """
     start, world, momentum, force, torque, estimate, scales, rates = work
     a, b, c, e, _, _ = method
+    over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
     to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
@@ -120,7 +121,7 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, estim
             if estimated and e[stage] != 0.0:
                 add_slope(estimate, i, h * e[stage], slope)
             if estimated and stage == 1:
-                rates[i] = _step_rate(kin.body_state(fsal, i), slope, a[1])
+                rates[i] = _step_rate(kin.body_state(fsal, i), slope, over_a21)
             if stage + 1 < b.size:
                 set_stage(start, i, following, slope, world, momentum, body_axes)
     to_public(y, body_axes)
@@ -176,10 +177,11 @@ def _squared_ratio(change, slope):
 
 
 @helper
-def _step_rate(first, second, a21):
+def _step_rate(first, second, over_a21):
     """``z = h rho`` from a step's first two slopes ``k1``, ``k2`` (slope tuples).
 
-    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h rho``, taken apart for each
+    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h rho`` (``over_a21`` is
+    ``1 / a21``: a product, where a quotient cost every body a division), taken apart for each
     part of the state (so free of units). Translation: the position's and the momentum's
     ratios multiply to ``z^2`` for an oscillator of any amplitude and phase (each alone
     depends on both), so their geometric mean (the one that changes, when the other keeps
@@ -195,7 +197,7 @@ def _step_rate(first, second, a21):
     else:
         translation = max(position, momentum)
     rotation = max(_squared_ratio(change[1], first[1]), _squared_ratio(change[3], first[3]))
-    rate = math.sqrt(max(translation, rotation)) / a21
+    rate = math.sqrt(max(translation, rotation)) * over_a21
     return rate if math.isfinite(rate) else 0.0
 
 
@@ -259,6 +261,7 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
     "A body at a time"). ``estimated`` False, as in :func:`_runge_kutta`.
     """
     a, b, c, e, e_end, rate_weight = method
+    over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
     if not continuing:
         _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, fsal)
     first, largest = 0, (0.0 if estimated else math.nan)
@@ -271,7 +274,7 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         total = 0.0
         for k in range(substeps):
-            start, first_slope, rate = (x, q, p, angular), slope, 0.0
+            start, rate = (x, q, p, angular), 0.0
             (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
                                                        h * e[0] if estimated else 0.0)
             # Stages 1 .. S-1, then the end: one place evaluates the wrench, which numba
@@ -295,14 +298,17 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
                     at = time + (k + 1) * h
                 force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
                                             model)
+                # The first slope, for the rate, kept only until the second is made: it takes
+                # no registers through the other stages.
+                previous = slope
                 slope = derivative(stage_q, stage_p, stage_angular, force, torque,
                                    inertia_inv, inverse_mass, body_axes)
+                if estimated and stage == 1 and stage < b.size:
+                    rate = _step_rate(previous, slope, over_a21)
                 if stage < b.size:
                     (x, q, p, angular), estimate = _take_slope(
                         (x, q, p, angular), estimate, slope, h * b[stage],
                         h * e[stage] if estimated else 0.0)
-                if estimated and stage == 1 and stage < b.size:
-                    rate = _step_rate(first_slope, slope, a[1])
             angular = stage_angular   # the end's internal momentum, where the next starts
             if estimated:
                 dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
