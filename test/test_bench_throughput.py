@@ -5,7 +5,7 @@ import math
 
 from rigid_sim.bench import cli
 from rigid_sim.bench.body_threads import METHODS
-from rigid_sim.bench.throughput import GUARDED, QUICK
+from rigid_sim.bench.throughput import GUARDED, QUICK, UNESTIMATED
 from rigid_sim.core.integrators import REGISTRY
 
 
@@ -20,7 +20,8 @@ def table_rows(text, title):
 def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
     """Every registered integrator has a positive, finite time per body-step at each N.
 
-    So have MuJoCo's Euler and RK4, installed with the test extra; each effect's cost is listed;
+    So have the methods that skip their estimate when nothing reads it, without it, and
+    MuJoCo's Euler and RK4, installed with the test extra; each effect's cost is listed;
     the world without effects made no call into effect code; the Markdown section and the plot
     are written, keeping hand-written text around the section; the wall-clock table has each
     method in one call and on threads, and MuJoCo RK4 with its ratios.
@@ -32,7 +33,8 @@ def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
     results = args.run(args)
     printed = capsys.readouterr().out
     per_body_step = table_rows(printed, 'CPU time per body-step')
-    expected = set(REGISTRY) | set(GUARDED) | {'mujoco Euler', 'mujoco RK4'}
+    expected = set(REGISTRY) | set(GUARDED) | set(UNESTIMATED) | {'mujoco Euler', 'mujoco RK4'}
+    assert set(UNESTIMATED.values()) == {'euler', 'rk4', 'rk4_world', 'semi_implicit_euler'}
     assert set(per_body_step) == expected
     for name, cells in per_body_step.items():
         assert len(cells) == len(QUICK['sizes'])

@@ -18,14 +18,14 @@ from test_fast_paths import _per_body_scene, COUNT
 THREADS = 3   # ranges of 2 of the 6 bodies: (0, 2), (2, 4), (4, 6)
 
 
-def _worlds(monkeypatch, name, damped):
+def _worlds(monkeypatch, name, damped, **options):
     """Two worlds of the same scene: stepped in one call, and on THREADS threads."""
     bodies, y, effects, wrenches = _per_body_scene(damped=damped)
-    one = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
+    one = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches, **options)
     monkeypatch.setattr(dispatch, 'THREADED_BODIES', COUNT)
     monkeypatch.setattr(dispatch, 'HEAVY_THREADED_BODIES', COUNT)
     monkeypatch.setattr(dispatch.config, 'NUMBA_NUM_THREADS', THREADS)
-    shared = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches)
+    shared = World(bodies, y, effects, name, auto_substep=False, inputs=wrenches, **options)
     assert isinstance(shared.integrator._kernel, dispatch.BodyThreads)
     assert not isinstance(one.integrator._kernel, dispatch.BodyThreads)
     return one, shared
@@ -46,6 +46,16 @@ def test_bodies_on_threads_step_to_the_bits_of_one_call(monkeypatch, name, dampe
     assert not np.array_equal(shared.y, start)
     np.testing.assert_array_equal(shared.integrator.error, one.integrator.error)
     assert shared.integrator.largest_error == one.integrator.error.max() > 0.0
+
+
+@pytest.mark.parametrize('name', ['rk4', 'rk4_world'])
+def test_bodies_on_threads_without_estimates_step_to_the_bits_of_one_call(monkeypatch, name):
+    """The kernels that skip the estimate share bodies as the others: the same bits, NaN."""
+    one, shared = _worlds(monkeypatch, name, True, error_control=False, estimates=False)
+    for world in (one, shared):
+        assert world.integrator.advance(world.y, 0.0, 0.05, 3, world.effect_parameters()) == 0
+    np.testing.assert_array_equal(shared.y, one.y)
+    assert np.isnan(shared.integrator.largest_error) and np.isnan(shared.integrator.error).all()
 
 
 @pytest.mark.parametrize('name', ['rk4', 'exact_split'])

@@ -323,3 +323,42 @@ def test_splitting_a_body_at_a_time_reports_the_first_bad_substep(bad, code):
         state[body, 0], state[body, 7] = position, momentum
     (got, *_), (staged, *_) = _advance_both('exact_split', world, state, 0.1, 4)
     assert got == staged == code
+
+
+@pytest.mark.parametrize('per_body', [True, False])
+@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'euler', 'semi_implicit_euler'])
+def test_a_step_nobody_estimates_moves_the_bodies_as_an_estimated_one(name, per_body):
+    """Without error control and with estimates=False the World steps without the estimate.
+
+    The estimate only reads the stages, so five steps give the very bits of the estimated
+    kernel, in either loop order, and the estimate reads NaN (not estimated), never a
+    number that says "no error".
+    """
+    bodies, y, effects, wrenches = _per_body_scene()
+    worlds = [World(bodies, y, effects, name, auto_substep=False, inputs=wrenches,
+                    error_control=False, estimates=estimates) for estimates in (True, False)]
+    if name != 'semi_implicit_euler':
+        for world in worlds:
+            world.integrator = REGISTRY[name](world, 1e-6, world.estimates, per_body=per_body)
+    for _ in range(5):
+        for world in worlds:
+            assert world.step(0.05)
+    estimated, bare = worlds
+    np.testing.assert_array_equal(bare.y, estimated.y)
+    assert math.isnan(bare.diagnostics.error_estimate) and np.isnan(bare.integrator.error).all()
+    assert 0.0 < estimated.diagnostics.error_estimate < math.inf
+
+
+def test_only_the_methods_with_a_bare_kernel_skip_the_estimate():
+    """Estimates are skipped only where nothing may read them, and only by the four methods.
+
+    Error control reads them: asking for both is refused. exact_split has no kernel
+    without its estimate, so it reports a number either way.
+    """
+    bodies, y, effects, wrenches = _per_body_scene()
+    with pytest.raises(ValueError, match='error control'):
+        World(bodies, y, effects, 'rk4', inputs=wrenches, estimates=False)
+    world = World(bodies, y, effects, 'exact_split', inputs=wrenches, error_control=False,
+                  estimates=False)
+    assert world.step(0.05)
+    assert 0.0 < world.diagnostics.error_estimate < math.inf

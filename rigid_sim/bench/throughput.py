@@ -44,6 +44,9 @@ QUICK = dict(sizes=(1, 10), work=20, repeats=5, effect_size=10,
 SECTION = 'rigid_sim_bench throughput'
 # Rows that add the World's step-size guard: row name -> integrator (exact_split: the default).
 GUARDED = {f'{name}, World auto_substep on': name for name in ('rk4', 'exact_split')}
+# Rows of the methods that skip their estimate when nothing reads it (World(estimates=False)).
+UNESTIMATED = {f'{name}, no estimate': name for name, cls in sorted(REGISTRY.items())
+               if cls.estimate_optional}
 # MuJoCo's default arena is too small for 1e4 bodies; ~20 kB a free body is ample.
 MUJOCO_MODEL = """<mujoco><size memory="{memory}M"/>
 <option timestep="{dt}" gravity="{g}" integrator="{integrator}">
@@ -97,18 +100,19 @@ def effects_of(n, kinds):
     return tuple(built)
 
 
-def rigid_sim_time(n, integrator, work, repeats, auto_substep=False, clock=time.process_time):
+def rigid_sim_time(n, integrator, work, repeats, auto_substep=False, clock=time.process_time,
+                   estimates=True):
     """Median CPU seconds per ``World.step`` of N bodies with ``integrator``.
 
-    ``auto_substep`` off times the integrator itself (its error estimate included); on adds
-    the World's step-size guard and error control. ``clock``: ``time.perf_counter`` for wall
-    seconds.
+    ``auto_substep`` off times the integrator itself (its error estimate included, unless
+    ``estimates`` is False); on adds the World's step-size guard and error control.
+    ``clock``: ``time.perf_counter`` for wall seconds.
     """
     def prepare():
         bodies, y = bodies_and_state(n)
         world = World(bodies, y, effects_of(n, 'gravity'), integrator,
                       auto_substep=auto_substep, inputs=held_wrenches(n),
-                      error_control=auto_substep)
+                      error_control=auto_substep, estimates=estimates)
         return lambda: [world.step(DT) for _ in range(steps)]
 
     steps = 1
@@ -187,6 +191,9 @@ def sweep(sizes, work, repeats, with_mujoco):
                for name in sorted(REGISTRY)}
     for row, name in GUARDED.items():
         results[row] = {n: rigid_sim_time(n, name, work, repeats, True) for n in sizes}
+    for row, name in UNESTIMATED.items():
+        results[row] = {n: rigid_sim_time(n, name, work, repeats, estimates=False)
+                        for n in sizes}
     if with_mujoco:
         for integrator in ('Euler', 'RK4'):
             results['mujoco ' + integrator] = {
@@ -207,7 +214,7 @@ def ratio_table(results, sizes):
         return 'MuJoCo is not installed: no ratios.'
     reference = results['mujoco RK4']
     names = [name for name, cls in sorted(REGISTRY.items()) if cls.order >= 4]
-    names += [DEFAULT_INTEGRATOR, 'semi_implicit_euler'] + list(GUARDED)
+    names += [DEFAULT_INTEGRATOR, 'semi_implicit_euler'] + list(GUARDED) + list(UNESTIMATED)
     rows = [[name] + [f'{reference[n] / results[name][n]:.3g}' for n in sizes]
             for name in names if name in results]
     return bench.markdown_table(['MuJoCo RK4 / method'] + [f'N = {n:g}' for n in sizes], rows)

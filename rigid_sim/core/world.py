@@ -46,10 +46,15 @@ class World:
         The wrenches held on the bodies; by default none of them takes wrench input.
     error_control : bool
         Split steps whose error estimate exceeds ``tolerance``; False for fixed-step studies.
+    estimates : bool
+        Whether anything reads the error estimates (``diagnostics``, the node's
+        /diagnostics). False, allowed only without error control, says nothing does: the
+        methods that can (``Integrator.estimate_optional``) step without estimating, and
+        ``diagnostics.error_estimate`` reads NaN. A ValueError with error control on.
     """
 
     def __init__(self, bodies, initial, effects=(), integrator='rk4', tolerance=1e-6,
-                 auto_substep=True, inputs=None, error_control=True):
+                 auto_substep=True, inputs=None, error_control=True, estimates=True):
         self.bodies = bodies
         self.initial = np.array(initial, dtype=float)
         shape = (bodies.count, STATE_WIDTH)
@@ -66,10 +71,14 @@ class World:
         self.velocity_dependent = any(e.velocity_dependent for e in self.effects)
         self._effect_parameters = tuple(effect.parameters for effect in self.effects)
         self._parameters = self._effect_parameters + (self.inputs.parameters,)
+        if error_control and not estimates:
+            raise ValueError('error control reads the error estimates: estimates=False needs '
+                             'error_control=False')
+        self.estimates = bool(estimates)
         self.control = StepController(
             safeguards.StepGuard(bodies, self.effects, self.inputs),
-            make_integrator(integrator, self, tolerance), tolerance, auto_substep,
-            error_control, bodies.count)
+            make_integrator(integrator, self, tolerance, self.estimates), tolerance,
+            auto_substep, error_control, bodies.count)
         self._restart()   # keeps wrenches the inputs were given before the world was built
 
     @property

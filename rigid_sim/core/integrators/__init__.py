@@ -33,13 +33,16 @@ REGISTRY = registry(
     ExplicitEuler, SemiImplicitEuler, RK4, RK4World, Dopri5, DLM, DLM4, ExactSplit, ExactSplit4)
 
 
-def make_integrator(name, system, tolerance=1e-6):
+def make_integrator(name, system, tolerance=1e-6, estimates=True):
     """Return the integrator registered as ``name``, built for ``system``.
 
+    ``estimates`` False: nothing reads its error estimates (see ``base.Integrator``).
     Raises ValueError listing the valid names for an unknown one.
     """
     try:
         cls = REGISTRY[name]
     except KeyError:
         raise ValueError(f'unknown integrator {name!r}; valid: {sorted(REGISTRY)}') from None
+    if cls.estimate_optional:
+        return cls(system, tolerance=tolerance, estimates=estimates)
     return cls(system, tolerance=tolerance)

@@ -12,9 +12,12 @@ once, to choose its compiled kernel, and keeps no reference to the system: every
 :meth:`Integrator.advance` is given the effects' parameters of that moment.
 
 Every call also estimates its local error per body (:mod:`rigid_sim.core.error_estimate`)
-into ``error``; ``largest_error`` is their largest. A method whose estimate per step shrinks
-as ``h^(estimate_order + 1)`` declares ``estimate_order``, from which the step controller
-predicts the substeps a tolerance needs.
+into ``error``; ``largest_error`` is their largest. Built with ``estimates`` False (nothing
+controls the error or reads it), a method with ``estimate_optional`` (``rk4``,
+``rk4_world``, ``euler``, ``semi_implicit_euler``) runs kernels without that work, and
+``error`` and ``largest_error`` read NaN, not estimated; the others estimate anyway. A
+method whose estimate per step shrinks as ``h^(estimate_order + 1)`` declares
+``estimate_order``, from which the step controller predicts the substeps a tolerance needs.
 
 To write a new method, subclass :class:`Integrator`, set ``name``, ``order``, ``bound``
 (from :mod:`rigid_sim.core.safeguards`), ``estimate_order`` and ``evaluations_per_step``,
@@ -39,16 +42,19 @@ class Integrator:
     # bound: the largest step it takes unsplit, a safeguards.StepBound that every method
     # declares for itself (registration refuses one that does not).
     evaluations_per_step = 1       # wrench evaluations of one step
+    estimate_optional = False      # has kernels without the error estimate
     # estimate_order: the local error estimate per step shrinks as h^(estimate_order + 1);
     # declared by every method (registration refuses one that does not).
 
-    def __init__(self, system, tolerance=1e-6):
+    def __init__(self, system, tolerance=1e-6, estimates=True):
         self.bodies = system.bodies
         self.tolerance = float(tolerance)
+        self.estimates = bool(estimates) or not self.estimate_optional
         self.evaluations = 0     # wrench evaluations since construction
         count = self.bodies.count
-        self.error = np.zeros(count)   # (N,) local error estimate of the last call, per body
-        self.largest_error = 0.0       # its largest
+        # (N,) local error estimate of the last call, per body, and its largest
+        self.error = np.zeros(count) if self.estimates else np.full(count, np.nan)
+        self.largest_error = 0.0 if self.estimates else np.nan
         self._force = np.zeros((count, 3))
         self._torque = np.zeros((count, 3))
 

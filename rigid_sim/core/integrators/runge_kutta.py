@@ -93,20 +93,23 @@ CLASSICAL_RK4 = Tableau(
 
 
 @helper
-def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal):
+def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, estimated, fsal):
     """One step of ``h`` on ``y`` in place; the estimate's terms of the stages into ``work``.
 
     Every stage uses only the slope of the one before, so no slope is stored: each body's
     slope goes straight into the sum and into the next stage. The first slope is the one
-    ``fsal`` holds (the last step's end, or :func:`_start_slopes`).
+    ``fsal`` holds (the last step's end, or :func:`_start_slopes`). ``estimated`` False:
+    no estimate's terms.
     """
     start, world, momentum, force, torque, estimate, scales, rates = work
     a, b, c, e, _, _ = method
+    over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
     to_internal(y, start, body_axes)
     kin.copy_columns(world, 0, y, 0, 13)
     kin.copy_columns(momentum, 0, start, 10, 3)
     kin.copy_columns(y, 10, momentum, 0, 3)   # y now sums the step in the internal layout
-    estimate[:, :] = 0.0
+    if estimated:
+        estimate[:, :] = 0.0
     for stage in range(b.size):
         if stage > 0:
             accumulate(effects, world, time + c[stage] * h, model, force, torque)
@@ -115,10 +118,10 @@ def _runge_kutta_step(y, work, model, effects, time, h, method, body_axes, fsal)
             slope = (kin.body_state(fsal, i) if stage == 0
                      else slope_of(world, momentum, model, force, torque, body_axes, i))
             add_slope(y, i, h * b[stage], slope)
-            if e[stage] != 0.0:
+            if estimated and e[stage] != 0.0:
                 add_slope(estimate, i, h * e[stage], slope)
-            if stage == 1:
-                rates[i] = _step_rate(kin.body_state(fsal, i), slope, a[1])
+            if estimated and stage == 1:
+                rates[i] = _step_rate(kin.body_state(fsal, i), slope, over_a21)
             if stage + 1 < b.size:
                 set_stage(start, i, following, slope, world, momentum, body_axes)
     to_public(y, body_axes)
@@ -174,10 +177,11 @@ def _squared_ratio(change, slope):
 
 
 @helper
-def _step_rate(first, second, a21):
+def _step_rate(first, second, over_a21):
     """``z = h rho`` from a step's first two slopes ``k1``, ``k2`` (slope tuples).
 
-    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h rho``, taken apart for each
+    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h rho`` (``over_a21`` is
+    ``1 / a21``: a product, where a quotient cost every body a division), taken apart for each
     part of the state (so free of units). Translation: the position's and the momentum's
     ratios multiply to ``z^2`` for an oscillator of any amplitude and phase (each alone
     depends on both), so their geometric mean (the one that changes, when the other keeps
@@ -193,7 +197,7 @@ def _step_rate(first, second, a21):
     else:
         translation = max(position, momentum)
     rotation = max(_squared_ratio(change[1], first[1]), _squared_ratio(change[3], first[3]))
-    rate = math.sqrt(max(translation, rotation)) / a21
+    rate = math.sqrt(max(translation, rotation)) * over_a21
     return rate if math.isfinite(rate) else 0.0
 
 
@@ -209,34 +213,41 @@ def _own_error(difference, rate_weight, rate):
 
 
 @helper(inline='always')
-def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, error, fsal,
-                 continuing):
+def _runge_kutta(y, work, model, effects, time, h, substeps, method, body_axes, estimated,
+                 error, fsal, continuing):
     """``substeps`` steps of ``h`` of ``method`` on ``y`` in place; (failure code, largest).
 
     ``method`` is what :meth:`Tableau.method` returns; ``error`` (N,) receives each body's
     estimate summed over the substeps, ``fsal`` (N, 13) the slopes at the end. A slope
     (dx, dq, dP, dL) has the state's layout, so it is read and written as a body's state
-    (``kin.body_state``, ``kin.store_body``).
+    (``kin.body_state``, ``kin.store_body``). ``estimated`` False (a constant of the kernel)
+    estimates nothing: ``error`` is left as it is and the largest is NaN.
     """
-    scales = work[6]
-    store_scales(y, model, h * substeps, scales)
+    if estimated:
+        store_scales(y, model, h * substeps, work[6])
     if not continuing:
         _start_slopes(y, work, model, effects, time, body_axes, fsal)
     return substeps_checked(_runge_kutta_substep, y, substeps,
-                            (work, model, effects, time, h, method, body_axes, error, fsal), error)
+                            (work, model, effects, time, h, method, body_axes, estimated, error,
+                             fsal), error, estimated)
 
 
 @helper
-def _runge_kutta_substep(y, k, work, model, effects, time, h, method, body_axes, error, fsal):
+def _runge_kutta_substep(y, k, work, model, effects, time, h, method, body_axes, estimated,
+                         error, fsal):
     """Substep ``k`` of :func:`_runge_kutta`: a step of ``h`` from ``time + k h``, estimated."""
-    _runge_kutta_step(y, work, model, effects, time + k * h, h, method, body_axes, fsal)
-    _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], method[5],
-                body_axes, fsal, error)
+    _runge_kutta_step(y, work, model, effects, time + k * h, h, method, body_axes, estimated,
+                      fsal)
+    if estimated:
+        _end_slopes(y, work, model, effects, time + (k + 1) * h, h * method[4], method[5],
+                    body_axes, fsal, error)
+    else:
+        _start_slopes(y, work, model, effects, time + (k + 1) * h, body_axes, fsal)
 
 
 @helper(inline='always')
 def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps, method,
-                          body_axes, error, fsal, continuing):
+                          body_axes, estimated, error, fsal, continuing):
     """:func:`_runge_kutta` for effects that each act on one body: a body at a time.
 
     Steps the bodies ``first_body`` to ``end - 1``: calls on disjoint ranges may run at once
@@ -247,23 +258,25 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
     code of the earliest bad substep over the bodies (the first such body's sign), as
     :func:`_runge_kutta` does. One function on purpose: a call per body, even inlined, took
     and dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
-    "A body at a time").
+    "A body at a time"). ``estimated`` False, as in :func:`_runge_kutta`.
     """
     a, b, c, e, e_end, rate_weight = method
+    over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
     if not continuing:
         _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, fsal)
-    first, largest = 0, 0.0
+    first, largest = 0, (0.0 if estimated else math.nan)
     for i in range(first_body, end):
         x, q, p, big_l = kin.body_state(y, i)
         inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
-        scales = body_scales(model, i, p, big_l, h * substeps)
+        scales = (body_scales(model, i, p, big_l, h * substeps) if estimated
+                  else (1.0, 1.0, 1.0))
         slope = kin.body_state(fsal, i)   # the first slope: the last step's end
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         total = 0.0
         for k in range(substeps):
-            start, first_slope, rate = (x, q, p, angular), slope, 0.0
+            start, rate = (x, q, p, angular), 0.0
             (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
-                                                       h * e[0])
+                                                       h * e[0] if estimated else 0.0)
             # Stages 1 .. S-1, then the end: one place evaluates the wrench, which numba
             # inlines (two inlined copies in one function confuse its variable scopes).
             for stage in range(1, b.size + 1):
@@ -285,25 +298,31 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
                     at = time + (k + 1) * h
                 force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
                                             model)
+                # The first slope, for the rate, kept only until the second is made: it takes
+                # no registers through the other stages.
+                previous = slope
                 slope = derivative(stage_q, stage_p, stage_angular, force, torque,
                                    inertia_inv, inverse_mass, body_axes)
+                if estimated and stage == 1 and stage < b.size:
+                    rate = _step_rate(previous, slope, over_a21)
                 if stage < b.size:
                     (x, q, p, angular), estimate = _take_slope(
-                        (x, q, p, angular), estimate, slope, h * b[stage], h * e[stage])
-                if stage == 1 and stage < b.size:
-                    rate = _step_rate(first_slope, slope, a[1])
+                        (x, q, p, angular), estimate, slope, h * b[stage],
+                        h * e[stage] if estimated else 0.0)
             angular = stage_angular   # the end's internal momentum, where the next starts
-            dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
-            total += _own_error(scaled_size(dx, turning_part(dq, q), dp, dl, scales),
-                                rate_weight, rate)
+            if estimated:
+                dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
+                total += _own_error(scaled_size(dx, turning_part(dq, q), dp, dl, scales),
+                                    rate_weight, rate)
             code = kin.check_body(x, q, p, big_l)
             if code != 0:
                 first, total = kin.earlier_failure(first, code, k + 1), math.inf
                 break
         kin.store_body(y, i, x, q, p, big_l)
         kin.store_body(fsal, i, *slope)
-        error[i] = total
-        largest = max(largest, total)
+        if estimated:
+            error[i] = total
+            largest = max(largest, total)
     return first, largest
 
 
@@ -337,63 +356,124 @@ def _plus_slope(u, weight, v):
             kin.plus_scaled(u[2], weight, v[2]), kin.plus_scaled(u[3], weight, v[3]))
 
 
-# One kernel per formulation, the flag a constant inside: compiled in, the per-body branch
-# on it disappears, which a runtime flag keeps in every body's loop.
+# One kernel per formulation and per estimate, the flags constants inside: compiled in, the
+# per-body branches on them disappear, which runtime flags keep in every body's loop. The
+# kernels without an estimate serve worlds that neither control the error nor read it
+# (``World(estimates=False)``).
+
+
 @kernel
 def body_axes_runge_kutta(y, work, model, effects, time, h, substeps, method, error, fsal,
                           continuing):
     """:func:`_runge_kutta` on body-axes angular momentum."""
-    return _runge_kutta(y, work, model, effects, time, h, substeps, method, True, error, fsal,
-                        continuing)
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, True, True, error,
+                        fsal, continuing)
 
 
 @kernel
 def world_axes_runge_kutta(y, work, model, effects, time, h, substeps, method, error, fsal,
                            continuing):
-    """:func:`_runge_kutta` on Baraff's world-axes angular momentum."""
-    return _runge_kutta(y, work, model, effects, time, h, substeps, method, False, error,
+    """:func:`_runge_kutta` on world-axes angular momentum."""
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, False, True, error,
                         fsal, continuing)
 
 
 @kernel
-def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error,
-                                   fsal, continuing):
-    """:func:`_runge_kutta_per_body` on body-axes angular momentum (``work`` unused)."""
-    return _runge_kutta_per_body(y, 0, y.shape[0], model, effects, time, h, substeps, method,
+def body_axes_runge_kutta_unestimated(y, work, model, effects, time, h, substeps, method, error,
+                                      fsal, continuing):
+    """:func:`_runge_kutta` on body-axes angular momentum, no estimate."""
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, True, False, error,
+                        fsal, continuing)
+
+
+@kernel
+def world_axes_runge_kutta_unestimated(y, work, model, effects, time, h, substeps, method, error,
+                                       fsal, continuing):
+    """:func:`_runge_kutta` on world-axes angular momentum, no estimate."""
+    return _runge_kutta(y, work, model, effects, time, h, substeps, method, False, False, error,
+                        fsal, continuing)
+
+
+@kernel
+def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error, fsal,
+                                   continuing):
+    """:func:`_runge_kutta_per_body` on body-axes angular momentum."""
+    return _runge_kutta_per_body(y, 0, y.shape[0], model, effects, time, h, substeps, method, True,
                                  True, error, fsal, continuing)
 
 
 @kernel
 def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error,
                                     fsal, continuing):
-    """:func:`_runge_kutta_per_body` on world-axes angular momentum (``work`` unused)."""
+    """:func:`_runge_kutta_per_body` on world-axes angular momentum."""
     return _runge_kutta_per_body(y, 0, y.shape[0], model, effects, time, h, substeps, method,
+                                 False, True, error, fsal, continuing)
+
+
+@kernel
+def body_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h, substeps, method,
+                                               error, fsal, continuing):
+    """:func:`_runge_kutta_per_body` on body-axes angular momentum, no estimate."""
+    return _runge_kutta_per_body(y, 0, y.shape[0], model, effects, time, h, substeps, method, True,
                                  False, error, fsal, continuing)
 
 
+@kernel
+def world_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h, substeps, method,
+                                                error, fsal, continuing):
+    """:func:`_runge_kutta_per_body` on world-axes angular momentum, no estimate."""
+    return _runge_kutta_per_body(y, 0, y.shape[0], model, effects, time, h, substeps, method,
+                                 False, False, error, fsal, continuing)
+
 # Kernels for a range of bodies (``work``: first, end), called on several at once: compiled
 # without the interpreter lock, which costs a one-call kernel 40 ns.
+
+
 @kernel(nogil=True)
-def body_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, method, error,
-                                   fsal, continuing):
+def body_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, method, error, fsal,
+                                   continuing):
     """:func:`body_axes_runge_kutta_per_body` on bodies ``work[0]`` to ``work[1] - 1``."""
-    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps,
-                                 method, True, error, fsal, continuing)
+    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps, method,
+                                 True, True, error, fsal, continuing)
 
 
 @kernel(nogil=True)
 def world_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, method, error,
                                     fsal, continuing):
     """:func:`world_axes_runge_kutta_per_body` on bodies ``work[0]`` to ``work[1] - 1``."""
-    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps,
-                                 method, False, error, fsal, continuing)
+    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps, method,
+                                 False, True, error, fsal, continuing)
 
 
-# (body axes, per body) -> kernel
-KERNELS = {(True, False): body_axes_runge_kutta, (False, False): world_axes_runge_kutta,
-           (True, True): body_axes_runge_kutta_per_body,
-           (False, True): world_axes_runge_kutta_per_body}
-THREADED = {True: body_axes_runge_kutta_threaded, False: world_axes_runge_kutta_threaded}
+@kernel(nogil=True)
+def body_axes_runge_kutta_threaded_unestimated(y, work, model, effects, time, h, substeps, method,
+                                               error, fsal, continuing):
+    """:func:`body_axes_runge_kutta_per_body_unestimated` on ``work[0]`` to ``work[1] - 1``."""
+    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps, method,
+                                 True, False, error, fsal, continuing)
+
+
+@kernel(nogil=True)
+def world_axes_runge_kutta_threaded_unestimated(y, work, model, effects, time, h, substeps, method,
+                                                error, fsal, continuing):
+    """:func:`world_axes_runge_kutta_per_body_unestimated` on ``work[0]`` to ``work[1] - 1``."""
+    return _runge_kutta_per_body(y, work[0], work[1], model, effects, time, h, substeps, method,
+                                 False, False, error, fsal, continuing)
+
+
+# (body axes, per body, estimated) -> kernel; (body axes, estimated) -> kernel for a range
+KERNELS = {(True, False, True): body_axes_runge_kutta,
+           (False, False, True): world_axes_runge_kutta,
+           (True, True, True): body_axes_runge_kutta_per_body,
+           (False, True, True): world_axes_runge_kutta_per_body,
+           (True, False, False): body_axes_runge_kutta_unestimated,
+           (False, False, False): world_axes_runge_kutta_unestimated,
+           (True, True, False): body_axes_runge_kutta_per_body_unestimated,
+           (False, True, False): world_axes_runge_kutta_per_body_unestimated}
+THREADED = {(True, True): body_axes_runge_kutta_threaded,
+            (False, True): world_axes_runge_kutta_threaded,
+            (True, False): body_axes_runge_kutta_threaded_unestimated,
+            (False, False): world_axes_runge_kutta_threaded_unestimated}
 
 
 class ExplicitRungeKutta(Integrator):
@@ -405,9 +485,10 @@ class ExplicitRungeKutta(Integrator):
     tableau = None
     body_axes = False
     rated = True   # the estimate scaled by the measured rate (Tableau), not the bound
+    estimate_optional = True
 
-    def __init__(self, system, tolerance=1e-6, per_body=None):
-        super().__init__(system, tolerance)
+    def __init__(self, system, tolerance=1e-6, estimates=True, per_body=None):
+        super().__init__(system, tolerance, estimates)
         self._method = self.tableau.method(self.rated)
         self.evaluations_per_step = len(self.tableau.b)
         count = self.bodies.count
@@ -420,9 +501,10 @@ class ExplicitRungeKutta(Integrator):
             np.empty((count, 13)), np.empty((count, 13)), np.empty((count, 3)), self._force,
             self._torque, np.empty((count, 13)), np.empty((count, 3)), np.zeros(count))
         self._end_slopes = np.zeros((count, 13))   # first same as last: the next step's first
-        self._kernel = CompiledCall(KERNELS[self.body_axes, per_body])
+        self._kernel = CompiledCall(KERNELS[self.body_axes, per_body, self.estimates])
         if per_body:
-            self._kernel = across_threads(self._kernel, THREADED[self.body_axes], count)
+            self._kernel = across_threads(self._kernel, THREADED[self.body_axes, self.estimates],
+                                          count)
 
     def _advance(self, y, time, h, substeps, effects, continuing):
         return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,

@@ -20,7 +20,7 @@ from rigid_sim.core.compiled import helper
 
 
 @helper(inline='always')
-def substeps_checked(substep, y, count, arguments, error):
+def substeps_checked(substep, y, count, arguments, error, estimated=True):
     """Run ``substep(y, k, *arguments)`` for ``k`` from 0 to ``count - 1``, checking ``y``.
 
     ``error`` (N,), which the substeps add their estimates into (it is among
@@ -28,11 +28,14 @@ def substeps_checked(substep, y, count, arguments, error):
     (0, ``error.max()``), or the first bad substep's code, its 1-based index, negative for a
     quaternion that overflowed before it was normalised (see
     :func:`~rigid_sim.core.kinematics.check_substep`), with an infinite estimate.
+    ``estimated`` False (a constant of the kernel: substeps that estimate nothing) leaves
+    ``error`` as it is and returns NaN for the estimate, not estimated.
     """
-    error[:] = 0.0
+    if estimated:
+        error[:] = 0.0
     for k in range(count):
         substep(y, k, *arguments)
         code = kin.check_substep(y)
         if code != 0:
             return code * (k + 1), math.inf
-    return 0, error.max()
+    return 0, (error.max() if estimated else math.nan)

@@ -14,28 +14,30 @@ from rigid_sim.core.integrators.substeps import substeps_checked
 
 
 @helper
-def _kick_drift(y, model, force, torque, h, before, estimate):
+def _kick_drift(y, model, force, torque, h, before, estimate, estimated):
     """Momenta kicked by the wrench, then x and q drifted with the new velocities.
 
     The step's local errors that the wrench at its start gives are written into
     ``estimate`` (N, 6), position and angle: ``h^2/2 F / M`` (the drift moves with the
     momentum at the step's end, not its mean) and ``h^2/2 I^-1 (tau + omega x L)`` (the
     rotation uses the angular velocity of the new ``L`` and the old orientation, Euler's
-    equations a mean one). The wrench is kept in ``before`` (N, 6).
+    equations a mean one). The wrench is kept in ``before`` (N, 6). ``estimated`` False
+    (a constant of the kernel): neither.
     """
     for i in range(y.shape[0]):
         q = kin.orientation(y, i)
         r = kin.matrix(q)
         inertia_inv = kin.entries(model.inertia_inv, i)
-        f, t, big_l = kin.vector(force, i, 0), kin.vector(torque, i, 0), kin.vector(y, i, 10)
-        half = 0.5 * h * h
-        spin = kin.angular_velocity(r, inertia_inv, big_l)
-        kin.store(estimate, i, 0, kin.scaled(half * model.inverse_mass[i], f))
-        gyroscopic = kin.add(t, kin.cross(spin, big_l))
-        kin.store(estimate, i, 3, kin.angular_velocity(r, inertia_inv,
-                                                       kin.scaled(half, gyroscopic)))
-        kin.store(before, i, 0, f)
-        kin.store(before, i, 3, t)
+        if estimated:
+            f, t = kin.vector(force, i, 0), kin.vector(torque, i, 0)
+            big_l, half = kin.vector(y, i, 10), 0.5 * h * h
+            spin = kin.angular_velocity(r, inertia_inv, big_l)
+            kin.store(estimate, i, 0, kin.scaled(half * model.inverse_mass[i], f))
+            gyroscopic = kin.add(t, kin.cross(spin, big_l))
+            kin.store(estimate, i, 3, kin.angular_velocity(r, inertia_inv,
+                                                           kin.scaled(half, gyroscopic)))
+            kin.store(before, i, 0, f)
+            kin.store(before, i, 3, t)
         for k in range(3):
             y[i, 7 + k] += h * force[i, k]
             y[i, 10 + k] += h * torque[i, k]
@@ -62,27 +64,48 @@ def _add_errors(y, model, force, torque, h, before, estimate, scales, error):
                                 kin.scaled(0.5 * h, dl), kin.vector(scales, i, 0))
 
 
-@kernel
-def semi_implicit_euler(y, work, model, effects, time, h, substeps, error, continuing):
+@helper(inline='always')
+def _semi_implicit_euler(y, work, model, effects, time, h, substeps, estimated, error,
+                         continuing):
     """``substeps`` steps of ``h`` on ``y`` in place; the failure code and largest estimate.
 
     The wrench at a step's end is the next step's first (and, when ``continuing``, the one
     ``work`` holds from the last call), so the estimate's wrench costs no evaluation.
+    ``estimated`` False estimates nothing: ``error`` is left as it is, the largest is NaN.
     """
     force, torque, before, estimate, scales = work
-    store_scales(y, model, h * substeps, scales)
+    if estimated:
+        store_scales(y, model, h * substeps, scales)
     if not continuing:
         accumulate(effects, y, time, model, force, torque)
-    return substeps_checked(_substep, y, substeps, (work, model, effects, time, h, error), error)
+    return substeps_checked(_substep, y, substeps,
+                            (work, model, effects, time, h, estimated, error), error, estimated)
 
 
 @helper
-def _substep(y, k, work, model, effects, time, h, error):
+def _substep(y, k, work, model, effects, time, h, estimated, error):
     """Substep ``k`` of :func:`semi_implicit_euler`; the wrench at its end, its estimate."""
     force, torque, before, estimate, scales = work
-    _kick_drift(y, model, force, torque, h, before, estimate)
+    _kick_drift(y, model, force, torque, h, before, estimate, estimated)
     accumulate(effects, y, time + (k + 1) * h, model, force, torque)
-    _add_errors(y, model, force, torque, h, before, estimate, scales, error)
+    if estimated:
+        _add_errors(y, model, force, torque, h, before, estimate, scales, error)
+
+
+# The flag a constant of each kernel, as in the Runge-Kutta kernels.
+@kernel
+def semi_implicit_euler(y, work, model, effects, time, h, substeps, error, continuing):
+    """:func:`_semi_implicit_euler`, estimated."""
+    return _semi_implicit_euler(y, work, model, effects, time, h, substeps, True, error,
+                                continuing)
+
+
+@kernel
+def semi_implicit_euler_unestimated(y, work, model, effects, time, h, substeps, error,
+                                    continuing):
+    """:func:`_semi_implicit_euler` without the estimate (``World(estimates=False)``)."""
+    return _semi_implicit_euler(y, work, model, effects, time, h, substeps, False, error,
+                                continuing)
 
 
 class SemiImplicitEuler(Integrator):
@@ -97,13 +120,15 @@ class SemiImplicitEuler(Integrator):
     order = 1
     bound = safeguards.SYMPLECTIC_EULER_STABILITY
     estimate_order = 1
+    estimate_optional = True
 
-    def __init__(self, system, tolerance=1e-6):
-        super().__init__(system, tolerance)
+    def __init__(self, system, tolerance=1e-6, estimates=True):
+        super().__init__(system, tolerance, estimates)
         count = self.bodies.count
         self._work = (self._force, self._torque, np.zeros((count, 6)), np.empty((count, 6)),
                       np.empty((count, 3)))
-        self._kernel = CompiledCall(semi_implicit_euler)
+        self._kernel = CompiledCall(semi_implicit_euler if self.estimates
+                                    else semi_implicit_euler_unestimated)
 
     def _advance(self, y, time, h, substeps, effects, continuing):
         return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,
