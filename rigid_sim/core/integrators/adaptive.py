@@ -53,6 +53,8 @@ def per_unit_step(stepper):
     the norm is replaced (scipy's ``_estimate_error_norm``, the method its step-size control
     calls); scipy still chooses, rejects and grows the steps.
     """
+    # A private method (unchanged since scipy 1.0): should it change, the estimates' test of
+    # dopri5 on the thin rod finds steps kept above their tolerance.
     class PerUnitStep(stepper):
         allowed = None   # (n,) error per second of step, the reported unit over its scale
 
@@ -181,6 +183,7 @@ class Dopri5(Integrator):
         solver = self._stepper(slope, time, z.ravel().copy(), end, rtol=self.tolerance,
                                atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
+        # The error test (rtol and atol above only feed scipy's own norm, which it replaces).
         solver.allowed = self.tolerance / span * scale.ravel()
         while solver.status == 'running':
             if self._left == 0:
