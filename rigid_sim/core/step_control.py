@@ -123,6 +123,10 @@ class StepController:
         self.diagnostics = StepDiagnostics()
         self._next_plan = self._ended = None
 
+    def state_changed(self):
+        """Start afresh: the state the last step ended at was changed after it (by contact)."""
+        self._ended = self._next_plan = None
+
     def step(self, y, into, time, dt, effects, version):
         """Advance ``y`` by ``dt`` into the array ``into``; ``into``, or None if given up.
 
