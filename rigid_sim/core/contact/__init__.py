@@ -113,14 +113,14 @@ class Contact:
         work = ContactWork(
             low=np.empty((n, 3)), high=np.empty((n, 3)), centre=np.empty((n, 3)),
             rotation=np.empty((n, 3, 3)), active=np.empty(n, dtype=np.bool_),
-            inertia=np.empty((n, 3, 3)), velocity=np.empty((n, 6)), impulse=np.empty((n, 12)),
+            inertia=np.empty((n, 3, 3)), velocity=np.empty((n, 6)), impulse=np.empty((n, 9)),
             pseudo=np.empty((n, 6)), pairs=np.empty((pairs, 2), dtype=np.int64),
             contacts=Contacts(np.empty((contacts, 2), dtype=np.int64),
                               np.empty(contacts, dtype=np.int64), np.empty((contacts, 3)),
                               np.empty((contacts, 3)), np.empty(contacts)),
             order=np.empty(contacts, dtype=np.int64), rows=np.empty((contacts, ROW)),
             body=np.empty((contacts, 2), dtype=np.int64), lam=np.empty((contacts, 3)),
-            push=np.empty((contacts, 1)), none=np.empty((0, 12)),
+            push=np.empty((contacts, 1)), none=np.empty((0, 9)),
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
             last_count=np.zeros(1, dtype=np.int64))
         if last is not None:

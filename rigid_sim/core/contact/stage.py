@@ -51,8 +51,8 @@ class ContactWork(NamedTuple):
     active: np.ndarray     # (N,) bool: has a collision shape
     inertia: np.ndarray    # (N, 3, 3) world inverse inertia, 1/(kg m^2)
     velocity: np.ndarray   # (N, 6) linear and angular velocity
-    impulse: np.ndarray    # (N, 12) this step's linear and angular impulse, N s, N m s;
-    # then friction's alone
+    impulse: np.ndarray    # (N, 9) this step's linear and angular impulse, N s, N m s;
+    # then friction's linear impulse alone
     pseudo: np.ndarray     # (N, 6) position-correction velocities
     pairs: np.ndarray      # (M, 2) int
     contacts: narrow.Contacts
@@ -61,7 +61,7 @@ class ContactWork(NamedTuple):
     body: np.ndarray       # (C, 2) int bodies, in key order
     lam: np.ndarray        # (C, 3) normal and tangential impulse, N s, in key order
     push: np.ndarray       # (C, 1) position-correction impulse
-    none: np.ndarray       # (0, 12): the pseudo-solve keeps no impulse sums
+    none: np.ndarray       # (0, 9): the pseudo-solve keeps no impulse sums
     last_key: np.ndarray   # (C,) int: the last step's keys, sorted
     last_lam: np.ndarray   # (C, 3) and their impulses
     last_count: np.ndarray  # (1,) int
@@ -79,9 +79,9 @@ def _shapes(y, model, parameters, work):
             work.inertia[i, k // 3, k % 3] = inertia[k]
         kin.store(work.velocity, i, 0, kin.scaled(model.inverse_mass[i], p))
         kin.store(work.velocity, i, 3, kin.rotate(inertia, big_l))
-        for k in range(6):
+        for k in range(9):
             work.impulse[i, k] = 0.0
-            work.impulse[i, 6 + k] = 0.0
+        for k in range(6):
             work.pseudo[i, k] = 0.0
         centre = kin.add(x, kin.rotate(r, kin.vector(parameters.offset, i, 0)))
         kin.store(work.centre, i, 0, centre)
@@ -244,8 +244,7 @@ def _move(y, model, work, h):
         sliding = kin.vector(work.impulse, i, 6)
         shift = kin.plus_scaled(kin.scaled(0.5 * h * model.inverse_mass[i], sliding), h,
                                 kin.vector(work.pseudo, i, 0))
-        twist = kin.rotate(kin.entries(work.inertia, i), kin.vector(work.impulse, i, 9))
-        turn = kin.plus_scaled(kin.scaled(0.5 * h, twist), h, kin.vector(work.pseudo, i, 3))
+        turn = kin.scaled(h, kin.vector(work.pseudo, i, 3))
         q = kin.normalize(kin.multiply(kin.exp_map(turn), q))
         kin.store_body(y, i, kin.add(x, shift), q, kin.add(p, kin.vector(work.impulse, i, 0)),
                        kin.add(big_l, kin.vector(work.impulse, i, 3)))
