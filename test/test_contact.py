@@ -11,7 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from rigid_sim.core.scene import build_world, parse_scene, SceneError
+from rigid_sim.core.scene import build_world, load_scene, parse_scene, SceneError
+from rigid_sim.resources import find_scene
 
 G = 9.81
 DOWN = [0.0, 0.0, -G]
@@ -233,3 +234,30 @@ def test_a_cylinder_needs_a_collision_shape_in_a_scene_with_contact():
     for _ in range(200):
         world.step(0.01)
     assert abs(world.y[0, 2] - 0.15) < 1e-6   # rests on its collision box
+
+
+def test_the_packaged_contact_scene_does_what_its_comment_says():
+    """The packaged contact.yaml: bounce, slide, stack as its comment says, then rest.
+
+    The ball's first rebound reaches ``e^2 h0 = 0.25 m``, the slider stops after
+    ``v^2 / (2 mu g)``, the boxes end stacked.
+    """
+    world = build_world(load_scene(find_scene('contact.yaml')))
+    names = world.bodies.names
+    ball, top, bottom, slider = (names.index(n) for n in ('ball', 'top_box', 'bottom_box',
+                                                           'slider'))
+    start = world.y[slider, 0]
+    apex, falling_again, dt = 0.0, False, 1e-3
+    for _ in range(5000):
+        world.step(dt)
+        if velocity(world, ball)[2] > 0.0:
+            apex = max(apex, world.y[ball, 2] - 0.1)
+            falling_again = True
+        elif falling_again:
+            break
+    assert abs(apex - 0.25) < 0.01 * 0.25
+    for _ in range(3000):
+        world.step(dt)
+    assert abs(world.y[slider, 0] - start - 2.0 ** 2 / (2 * 0.4 * G)) < 0.005
+    assert abs(world.y[top, 2] - 0.3) < 1e-3 and abs(world.y[bottom, 2] - 0.1) < 1e-3
+    assert np.abs(world.y[:, 7:13]).max() < 1e-6

@@ -15,15 +15,19 @@ Friction acts as a constant force would over the step that just ended: the centr
 mass move by ``h/2`` times the change of velocity friction made (the trapezoidal rule,
 exact for a slide's constant deceleration and for rolling). The orientations do not: the
 same shift of the angles made a stack of boxes, whose friction couples hold each other,
-grow a wobble and fall (measured: 10 boxes fell within 2 s; docs/contact.md). The normal impulses change velocities
-only; the penetration the step left is removed by a second solve, of pseudo-velocities that
-move the positions only (split impulse), so the correction adds no energy and a body
-resting under gravity ends each step exactly on its support.
+grow a wobble and fall (measured: 10 boxes fell within 2 s; docs/contact.md). The normal
+impulses change velocities only; the penetration the step left is removed by a second
+solve, of pseudo-velocities that move the positions only (split impulse), so the
+correction adds no energy and a body resting under gravity ends each step exactly on its
+support.
 """
 import math
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper
+
+# The helpers a Gauss-Seidel sweep calls per contact are inlined into it: a call that passes
+# arrays takes and drops a reference to each, which cost more than the row's arithmetic.
 
 
 @helper
@@ -52,14 +56,14 @@ def tangents(n):
     return t1, kin.cross(n, t1)
 
 
-@helper
+@helper(inline='always')
 def _mobility(inverse_mass, inv_inertia, i, arm, u, w):
     """``u . (dv + dw x arm)`` of body ``i`` per unit impulse along ``w`` at ``arm``."""
     turn = kin.rotate(kin.entries(inv_inertia, i), kin.cross(arm, w))
     return inverse_mass[i] * kin.dot(u, w) + kin.dot(kin.cross(arm, u), turn)
 
 
-@helper
+@helper(inline='always')
 def coupling(inverse_mass, inv_inertia, a, b, arm_a, arm_b, u, w):
     """Relative velocity along ``u`` at the contact per unit impulse along ``w``, s/kg."""
     k = _mobility(inverse_mass, inv_inertia, a, arm_a, u, w)
@@ -68,7 +72,7 @@ def coupling(inverse_mass, inv_inertia, a, b, arm_a, arm_b, u, w):
     return k
 
 
-@helper
+@helper(inline='always')
 def relative_velocity(velocity, a, b, arm_a, arm_b):
     """Velocity of ``a``'s material point at the contact minus ``b``'s, world, m/s.
 
@@ -81,7 +85,7 @@ def relative_velocity(velocity, a, b, arm_a, arm_b):
     return v
 
 
-@helper
+@helper(inline='always')
 def _push(velocity, impulse, inverse_mass, inv_inertia, i, arm, j, sliding):
     """Apply the impulse ``j`` at ``arm`` to body ``i``: its velocities and (if kept) sums.
 
@@ -101,7 +105,7 @@ def _push(velocity, impulse, inverse_mass, inv_inertia, i, arm, j, sliding):
                 impulse[i, 6 + k] += j[k]
 
 
-@helper
+@helper(inline='always')
 def apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, sliding):
     """Apply ``j`` to ``a`` and ``-j`` to ``b`` (none for a plane) at their arms.
 
@@ -115,13 +119,13 @@ def apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, s
               sliding)
 
 
-@helper
+@helper(inline='always')
 def friction_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, mu, body, lam):
     """One Gauss-Seidel update of contact ``s``'s tangential impulse, kept in the cone.
 
     ``rows`` (C, 24): arm a, arm b, normal, tangent 1, tangent 2, the tangential mass, two
     spare, the normal mass, the normal target, the approach speed, the distance, the rigid
-    normal mass, the correction's target.
+    normal mass, the correction's target. Returns the largest change of a component, N s.
     """
     a, b = body[s, 0], body[s, 1]
     arm_a, arm_b = kin.vector(rows, s, 0), kin.vector(rows, s, 3)
@@ -142,15 +146,17 @@ def friction_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, mu, body
     lam[s, 1], lam[s, 2] = l1, l2
     j = kin.add(kin.scaled(d1, t1), kin.scaled(d2, t2))
     apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, True)
+    return max(abs(d1), abs(d2))
 
 
-@helper
+@helper(inline='always')
 def normal_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, softness, body, lam,
                target):
     """One Gauss-Seidel update of contact ``s``'s normal impulse toward ``target``, kept >= 0.
 
     ``softness`` is the compliance over the step squared, (m/s) per (N s): a soft contact
     gives way in proportion to its impulse. ``lam`` is (C, k), its column 0 the normal.
+    Returns the size of the change, N s.
     """
     a, b = body[s, 0], body[s, 1]
     arm_a, arm_b, n = kin.vector(rows, s, 0), kin.vector(rows, s, 3), kin.vector(rows, s, 6)
@@ -160,3 +166,4 @@ def normal_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, softness, 
     lam[s, 0] = new
     apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b,
           kin.scaled(change, n), False)
+    return abs(change)

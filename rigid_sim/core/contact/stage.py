@@ -24,6 +24,9 @@ from rigid_sim.core.contact.solver import (
 
 SPHERE, BOX = 1, 2   # shape kinds; 0: no collision shape
 ROW = 24             # width of a contact's row of solver constants
+# A solve stops at the sweep whose largest change of an impulse is at most this fraction of
+# the largest impulse: further sweeps would change the velocities by round-off only.
+CONVERGED = 1e-12
 
 
 class ContactParameters(NamedTuple):
@@ -209,26 +212,40 @@ def _solve(model, parameters, work, count, h):
     rows, m, inertia = work.rows, model.inverse_mass, work.inertia
     softness = parameters.compliance / (h * h)
     # Sweeps of the normal impulses alone first: friction then starts from the weights
-    # the contacts carry, not from the rotations a first sweep's uneven pushes make.
+    # the contacts carry, not from the rotations a first sweep's uneven pushes make. Each
+    # solve stops at the sweep that changes no impulse by more than CONVERGED of the
+    # largest: contacts that do not interact (balls on a floor) take one sweep.
     for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
         for s in range(count):
-            normal_row(rows, s, work.velocity, work.impulse, m, inertia, softness, work.body,
-                       work.lam, rows[s, 19])
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                            softness, work.body, work.lam, rows[s, 19]))
+            largest = max(largest, work.lam[s, 0])
+        if change <= CONVERGED * largest:
+            break
     for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
         for s in range(count):
-            normal_row(rows, s, work.velocity, work.impulse, m, inertia, softness, work.body,
-                       work.lam, rows[s, 19])
-            friction_row(rows, s, work.velocity, work.impulse, m, inertia,
-                         parameters.friction, work.body, work.lam)
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                            softness, work.body, work.lam, rows[s, 19]))
+            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                              parameters.friction, work.body, work.lam))
+            largest = max(largest, work.lam[s, 0])
+        if change <= CONVERGED * largest:
+            break
     # The penetration is removed within the step.
     for s in range(count):
         rows[s, 23] = -rows[s, 21] / h
         rows[s, 18] = rows[s, 22]   # the correction is rigid
         work.push[s, 0] = 0.0
     for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
         for s in range(count):
-            normal_row(rows, s, work.pseudo, work.none, m, inertia, 0.0, work.body,
-                       work.push, rows[s, 23])
+            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, inertia, 0.0,
+                                            work.body, work.push, rows[s, 23]))
+            largest = max(largest, work.push[s, 0])
+        if change <= CONVERGED * largest:
+            break
 
 
 @helper
