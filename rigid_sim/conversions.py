@@ -264,8 +264,8 @@ def contact_markers(frame_id, seconds, planes, points, normals):
         ground.color.r = ground.color.g = ground.color.b = 0.6
         ground.color.a = 0.5
         markers.append(ground)
-    for k, (point, normal) in enumerate(zip(np.asarray(points).tolist(),
-                                             np.asarray(normals).tolist())):
+    arrows = zip(np.asarray(points).tolist(), np.asarray(normals).tolist())
+    for k, (point, normal) in enumerate(arrows):
         arrow = Marker(ns='contacts', id=k, type=Marker.ARROW, action=Marker.ADD)
         arrow.pose.orientation.w = 1.0
         tip = [p + ARROW_LENGTH * n for p, n in zip(point, normal)]

@@ -244,8 +244,8 @@ def test_the_packaged_contact_scene_does_what_its_comment_says():
     """
     world = build_world(load_scene(find_scene('contact.yaml')))
     names = world.bodies.names
-    ball, top, bottom, slider = (names.index(n) for n in ('ball', 'top_box', 'bottom_box',
-                                                           'slider'))
+    chosen = ('ball', 'top_box', 'bottom_box', 'slider')
+    ball, top, bottom, slider = (names.index(name) for name in chosen)
     start = world.y[slider, 0]
     apex, falling_again, dt = 0.0, False, 1e-3
     for _ in range(5000):
