@@ -8,7 +8,7 @@ from setuptools import find_packages, setup
 PACKAGE = 'rigid_sim'
 # The ROS 2 Jazzy wheels on PyPI, for a machine without a ROS install.
 ROS_WHEELS = ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp']
-BENCH = ['mujoco', 'matplotlib', 'tqdm']
+BENCH = ['mujoco==4.0.1', 'matplotlib', 'tqdm']   # MuJoCo pinned: docs/ tables name it
 # What rigid_sim_build_interfaces needs to build simulation_interfaces and tf2_msgs (no wheel
 # has them) with rosidl: ament_cmake, the generators, action_msgs for the action, and Ninja;
 # CMake and a C compiler come from the system (the cmake wheel would add 77 MB).
