@@ -261,3 +261,17 @@ def test_the_packaged_contact_scene_does_what_its_comment_says():
     assert abs(world.y[slider, 0] - start - 2.0 ** 2 / (2 * 0.4 * G)) < 0.005
     assert abs(world.y[top, 2] - 0.3) < 1e-3 and abs(world.y[bottom, 2] - 0.1) < 1e-3
     assert np.abs(world.y[:, 7:13]).max() < 1e-6
+
+
+def test_warm_up_compiles_the_contact_stage_and_changes_nothing():
+    """The node warms a world up before it ticks: contact's kernel is among those compiled."""
+    from rigid_sim.core.warm_up import warm_up
+    world = contact_world([cube('a', 0.2, (0.0, 0.0, 0.1))])
+    for _ in range(3):
+        world.step(0.01)
+    before = (world.y.copy(), world.contact.work.last_lam.copy(), world.contact.count)
+    warm_up(world)
+    np.testing.assert_array_equal(world.y, before[0])
+    np.testing.assert_array_equal(world.contact.work.last_lam, before[1])
+    assert world.contact.count == before[2] == 4
+    assert world.contact.work.last_count[0] == 4

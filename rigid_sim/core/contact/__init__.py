@@ -148,6 +148,18 @@ class Contact:
             self.work = self._room(max(room, 2 * found), max(self.work.pairs.shape[0],
                                                              2 * pairs), self.work)
 
+    def probe(self, y, h, model):
+        """Compile (or load) the stage by one call on a copy of ``y``; nothing is changed.
+
+        The warm start, the scratch and the last step's contacts are kept as they were.
+        """
+        kept, count = self.work, self.count
+        self.work = self._room(kept.order.shape[0], kept.pairs.shape[0], kept)
+        try:
+            self.resolve(np.array(y, dtype=float), h, model)
+        finally:
+            self.work, self.count = kept, count
+
     def contacts(self):
         """Return the last step's contacts in key order: bodies (C, 2), points, normals, impulses.
 
