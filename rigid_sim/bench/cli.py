@@ -4,11 +4,13 @@
 import argparse
 import sys
 
-from rigid_sim.bench import (MissingPackage, accuracy, estimates, flood, goals, imu_cost,
-                             inertia_cost, node_rate, stability, startup, throughput)
+from rigid_sim.bench import (MissingPackage, accuracy, contact, estimates, flood, goals,
+                             imu_cost, inertia_cost, node_rate, stability, startup,
+                             throughput)
 
 SUBCOMMANDS = (
     ('accuracy', accuracy, 'integrator error against CPU time, with exact oracles'),
+    ('contact', contact, 'contact scenes against closed forms and MuJoCo, in one run'),
     ('estimates', estimates, 'error estimates of every integrator against the true local error'),
     ('flood', flood, 'a flood of wrench messages: real-time factor with and without'),
     ('goals', goals, 'goals solved for the twist or wrench that reaches them, against scipy'),

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rigid_sim.core.contact import Contact
+from rigid_sim.core.contact.shapes import collision_shape, default_collision
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects import REGISTRY as EFFECTS
@@ -61,6 +63,9 @@ class BodySpec:
     # What a goal for this body solves for: unknowns in goals.UNKNOWNS, axes of a wrench,
     # and the speed limits of a solved twist (goals.Goal).
     goal: dict = dataclasses.field(default_factory=lambda: dict(GOAL_DEFAULT))
+    # Collision shape, body frame (rigid_sim.core.contact.shapes): given, else the shape's
+    # own where it is a sphere or box; None: neither (refused where the scene lists contact).
+    collision: dict = None
 
 
 @dataclass(frozen=True)
@@ -83,6 +88,9 @@ class Scene:
     # Work limits in force (the operator's, lowered by the file's limits:): bodies spawned
     # later are held to them too.
     work_limits: dict = field(default_factory=lambda: dict(WORK_LIMITS))
+    # The contact: entry of effects: as rigid_sim.core.contact.SETTINGS checks it; None:
+    # not listed, and the world has no contact stage.
+    contact: dict = None
 
 
 SHAPES = {
@@ -103,7 +111,7 @@ BODY = {'name': (token, REQUIRED), 'shape': (raw, REQUIRED),
                         'orientation': (quaternion, [0.0, 0.0, 0.0, 1.0])}), {}),
         'twist': (table({'linear': (vector, ZERO), 'angular': (vector, ZERO)}), {}),
         'points': (points, {}), 'wrench_input': (of_type(bool, 'true or false'), True),
-        'imu': (raw, ABSENT),
+        'imu': (raw, ABSENT), 'collision': (collision_shape, ABSENT),
         'goal': (table({'unknowns': (choice(*UNKNOWNS), GOAL_DEFAULT['unknowns']),
                         'axes': (choice(*WRENCH_AXES), GOAL_DEFAULT['axes']),
                         'max_speed': (positive, MAX_SPEED),
@@ -113,8 +121,10 @@ SCENE = {'world_frame': (token, 'world'),
                            'max_torque': (positive, DEFAULT_MAX_TORQUE),
                            **{name: (count, ABSENT) for name in WORK_LIMITS}}), {}),
          # Each effect's own fields (rigid_sim.core.effects.REGISTRY), in its order.
-         'effects': (table({name: (effect.scene_fields, ABSENT)
-                            for name, effect in EFFECTS.items()}), {}),
+         # Contact is listed among them but is a stage after each step, not a force.
+         'effects': (table({**{name: (effect.scene_fields, ABSENT)
+                               for name, effect in EFFECTS.items()},
+                            Contact.name: (Contact.scene_fields, ABSENT)}), {}),
          'magnetic_field': (vector, ABSENT),   # read by magnetometers only, T
          # Raw here; parse_body checks each, as it needs the scene's directory.
          'bodies': (list_of(raw, 'bodies'), REQUIRED)}
@@ -202,6 +212,7 @@ def parse_body(value, key, budget, has_field):
         origin=body['pose']['position'], orientation=body['pose']['orientation'],
         linear_velocity=body['twist']['linear'], angular_velocity=body['twist']['angular'],
         points=body['points'], wrench_input=body['wrench_input'], goal=body['goal'],
+        collision=body.get('collision', default_collision(shape)),
         imus=parse_imus(body['imu'], f'{key}.imu', body['points'], has_field)
         if 'imu' in body else ())
 
@@ -265,6 +276,21 @@ def world_frame_clash(bodies, world_frame):
     return None
 
 
+def _contact(listed, bodies):
+    """Take the contact settings out of ``listed``; None if not listed.
+
+    Every body then needs a collision shape: refused at the first that has none.
+    """
+    settings = listed.pop(Contact.name, None)
+    if settings is not None:
+        for i, body in enumerate(bodies):
+            if body.collision is None:
+                raise Mistake(f'bodies[{i}].collision', f'a {body.shape["type"]} body needs '
+                              'a collision shape (sphere, box or none) when the scene lists '
+                              'contact: only spheres and boxes collide')
+    return settings
+
+
 def _effects(listed, bodies):
     """Return each listed effect's settings resolved against ``bodies``; empty ones left out.
 
@@ -296,12 +322,13 @@ def parse_scene(data, path='<memory>', base_dir='.', roots=None, **limits):
                         allowed, base_dir, roots)
         field = scene.get('magnetic_field')
         bodies = _bodies(scene['bodies'], scene['world_frame'], budget, field is not None)
+        contact = _contact(scene['effects'], bodies)
         effects = _effects(scene['effects'], bodies)
     except Mistake as mistake:
         raise SceneError(path, mistake.key, mistake.reason) from None
     return Scene(path=str(path), world_frame=scene['world_frame'], bodies=bodies,
                  effects=effects, magnetic_field=field, work_limits=budget.limits,
-                 **scene['limits'])
+                 contact=contact, **scene['limits'])
 
 
 def load_scene(path, roots=None, **limits):
@@ -350,7 +377,21 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6, error_cont
     accepts = [body.wrench_input for body in scene.bodies]
     inputs = AppliedWrenches(bodies, scene.max_force, scene.max_torque, accepts)
     return World(bodies, initial, effects, integrator, tolerance, inputs=inputs,
-                 error_control=error_control)
+                 error_control=error_control, contact=_contact_stage(scene, bodies))
+
+
+def _contact_stage(scene, bodies):
+    """Return the :class:`Contact` of ``scene`` on ``bodies``; None when it lists no contact.
+
+    Raises ValueError for a body without a collision shape (one spawned into the scene).
+    """
+    if scene.contact is None:
+        return None
+    for body in scene.bodies:
+        if body.collision is None:
+            raise ValueError(f'body {body.name!r}: a {body.shape["type"]} body needs a '
+                             'collision shape (sphere, box or none) in a scene with contact')
+    return Contact(bodies, [body.collision for body in scene.bodies], **scene.contact)
 
 
 def check_world_frame(scene, world_frame):

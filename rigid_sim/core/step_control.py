@@ -130,6 +130,10 @@ class StepController:
         self._next_plan = self._ended = None
         self._error_held = 0
 
+    def state_changed(self):
+        """Start afresh: the state the last step ended at was changed after it (by contact)."""
+        self._ended = self._next_plan = None
+
     def step(self, y, into, time, dt, effects, version):
         """Advance ``y`` by ``dt`` into the array ``into``; ``into``, or None if given up.
 

@@ -38,6 +38,8 @@ def warm_up(world, integrator=None, imus=None):
     probe = world.y.copy()
     with np.errstate(all='ignore'):
         integrator.advance(probe, world.time, PROBE_STEP, 1, world.effect_parameters())
+    if world.contact is not None:
+        world.contact.probe(probe, PROBE_STEP, world.bodies.model)
     snapshot = world.snapshot()
     kinematics.largest_spin(world.y, world.bodies.model.inertia_inv, world.torqued,
                             world.inputs.held_mask, True)

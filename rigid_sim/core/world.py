@@ -7,7 +7,8 @@ changes while stepping (``bodies.model`` and the effects' parameter arrays), the
 ``y`` (N, 13) that every step replaces, and the inputs (``inputs``: held wrenches, with their
 hold ends). The integrator's kernel is compiled for exactly the listed effects. A step is a
 recipe: expire the inputs, let the step controller (:mod:`rigid_sim.core.step_control`)
-advance the state, record the time.
+advance the state, resolve the contacts when the scene lists contact
+(:mod:`rigid_sim.core.contact`), record the time.
 """
 import math
 
@@ -51,11 +52,15 @@ class World:
         /diagnostics). False, allowed only without error control, says nothing does: the
         methods that can (``Integrator.estimate_optional``) step without estimating, and
         ``diagnostics.error_estimate`` reads NaN. A ValueError with error control on.
+    contact : rigid_sim.core.contact.Contact, optional
+        The contact stage, run after every step (:meth:`step`); None: the scene lists none.
     """
 
     def __init__(self, bodies, initial, effects=(), integrator='rk4', tolerance=1e-6,
-                 auto_substep=True, inputs=None, error_control=True, estimates=True):
+                 auto_substep=True, inputs=None, error_control=True, estimates=True,
+                 contact=None):
         self.bodies = bodies
+        self.contact = contact
         self.initial = np.array(initial, dtype=float)
         shape = (bodies.count, STATE_WIDTH)
         if self.initial.shape != shape or not np.isfinite(self.initial).all():
@@ -113,6 +118,8 @@ class World:
         self._y = np.array(state, dtype=float, order='C')
         self._spare = np.empty_like(self._y)
         self._take_stock()
+        if self.contact is not None:
+            self.contact.forget()   # the last impulses belong to the state replaced
 
     def _take_stock(self):
         """Note every body's ``|L|`` and rotational energy, and which hold a wrench now."""
@@ -190,6 +197,10 @@ class World:
                                     self.effect_parameters(), inputs.version)
         if stepped is None:
             return False
+        # Contact changes the state the step ended at: the controller must not continue
+        # from what it computed there (the end wrench, the next plan).
+        if self.contact is not None and self.contact.resolve(stepped, dt, self.bodies.model):
+            self.control.state_changed()
         self._spare, self._y = self._y, stepped
         self.time += dt
         return True

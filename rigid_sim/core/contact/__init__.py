@@ -1,0 +1,173 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""Contact: bodies rest on, slide along, roll on and bounce off planes and each other.
+
+Contact is listed under the scene's ``effects:`` as ``contact:``, but it is not a force of
+the state: it is a velocity-level stage the World runs after each step of its integrator
+(:meth:`rigid_sim.core.world.World.step`), one compiled call
+(:func:`~rigid_sim.core.contact.stage.contact_step`) that detects the contacts of the
+state the step ended at and changes momenta and positions by impulses. A scene without
+``contact:`` builds no :class:`Contact`, and its worlds step as they always did.
+
+One module per concern: :mod:`~rigid_sim.core.contact.broad` (sort and sweep),
+:mod:`~rigid_sim.core.contact.narrow` (the primitive pairs),
+:mod:`~rigid_sim.core.contact.solver` (the impulses), :mod:`~rigid_sim.core.contact.stage`
+(the compiled call that runs them), :mod:`~rigid_sim.core.contact.shapes` (each body's
+collision shape from the scene).
+"""
+import numpy as np
+
+from rigid_sim.core.contact.narrow import Contacts
+from rigid_sim.core.contact.shapes import shape_arrays
+from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step, ROW
+from rigid_sim.core.scene_fields import (
+    count, list_of, Mistake, non_negative, number, REQUIRED, table, vector)
+from rigid_sim.core.dispatch import CompiledCall
+
+# A plane's normal shorter than this has no direction to normalise.
+MIN_NORMAL = 1e-9
+# Gauss-Seidel sweeps at most: each costs a pass over the contacts, twice (impulses and
+# positions), and a tick must stay bounded.
+MAX_ITERATIONS = 1000
+# Features closer than this are contacts, m: bodies that touch exactly stay touching when a
+# step moves them together (a stack), and an impact is found at most this early.
+MARGIN = 1e-5
+# Room for this many body-body contacts per body at first; more is made when a step needs it.
+PAIR_ROOM = 8
+
+
+def _planes(value, key):
+    """Check the ground planes: a list of {normal, offset}, the normal made unit."""
+    planes = list_of(table({'normal': (vector, REQUIRED), 'offset': (number, 0.0)}),
+                     'planes')(value, key)
+    rows = []
+    for k, plane in enumerate(planes):
+        length = float(np.linalg.norm(plane['normal']))
+        if length < MIN_NORMAL:
+            raise Mistake(f'{key}[{k}].normal', 'a plane normal must not be zero')
+        rows.append(np.append(plane['normal'] / length, plane['offset']))
+    return np.array(rows, dtype=float).reshape(len(rows), 4)
+
+
+def _fraction(value, key):
+    """Check a number in [0, 1] (restitution)."""
+    value = non_negative(value, key)
+    if value > 1.0:
+        raise Mistake(key, f'must be at most 1 (1: elastic, 0: no bounce), got {value!r}')
+    return value
+
+
+def _iterations(value, key):
+    value = count(value, key)
+    if value > MAX_ITERATIONS:
+        raise Mistake(key, f'must be at most {MAX_ITERATIONS}, got {value}')
+    return value
+
+
+SETTINGS = {
+    'planes': (_planes, []),             # the ground: n . x = offset, bodies on the n side
+    'friction': (non_negative, 0.5),     # Coulomb's mu
+    'restitution': (_fraction, 0.0),     # Newton's e
+    # m/s: an approach slower than this ends at rest instead of bouncing (no Zeno).
+    'resting_speed': (non_negative, 0.2),
+    'compliance': (non_negative, 0.0),   # m/N; 0: rigid
+    'iterations': (_iterations, 30),     # Gauss-Seidel sweeps per step
+}
+
+
+class Contact:
+    """The contact stage of one world: its settings, the bodies' shapes, its scratch.
+
+    Parameters
+    ----------
+    bodies : RigidBodies
+        The world's bodies (their centres of mass place the shapes).
+    collision : sequence of dict
+        Each body's collision shape in its body frame, as :mod:`.shapes` checks them.
+    planes : (P, 4) float
+        Unit normal and offset of each ground plane, world.
+    friction, restitution, resting_speed, compliance, iterations
+        As :data:`SETTINGS` says.
+    """
+
+    name = 'contact'
+    scene_fields = table(SETTINGS)
+
+    def __init__(self, bodies, collision, planes, friction=0.5, restitution=0.0,
+                 resting_speed=0.2, compliance=0.0, iterations=30):
+        kind, size = shape_arrays(collision)
+        self.parameters = ContactParameters(
+            np.ascontiguousarray(planes, dtype=float).reshape(-1, 4), kind, size,
+            np.ascontiguousarray(-bodies.com_in_body, dtype=float), float(friction),
+            float(restitution), float(resting_speed), float(compliance), int(iterations),
+            MARGIN)
+        n = bodies.count
+        self._bodies = n
+        self.work = self._room(n * (8 * len(self.parameters.planes) + PAIR_ROOM), n * PAIR_ROOM)
+        self.count = 0   # contacts of the last step
+        self._call = CompiledCall(contact_step)
+
+    def _room(self, contacts, pairs, last=None):
+        """Scratch for ``contacts`` contacts and ``pairs`` pairs; keeps ``last``'s memory."""
+        n = self._bodies
+        work = ContactWork(
+            low=np.empty((n, 3)), high=np.empty((n, 3)), centre=np.empty((n, 3)),
+            rotation=np.empty((n, 3, 3)), active=np.empty(n, dtype=np.bool_),
+            inertia=np.empty((n, 3, 3)), velocity=np.empty((n, 6)), impulse=np.empty((n, 9)),
+            pseudo=np.empty((n, 6)), pairs=np.empty((pairs, 2), dtype=np.int64),
+            contacts=Contacts(np.empty((contacts, 2), dtype=np.int64),
+                              np.empty(contacts, dtype=np.int64), np.empty((contacts, 3)),
+                              np.empty((contacts, 3)), np.empty(contacts)),
+            order=np.empty(contacts, dtype=np.int64), rows=np.empty((contacts, ROW)),
+            body=np.empty((contacts, 2), dtype=np.int64), lam=np.empty((contacts, 3)),
+            push=np.empty((contacts, 1)), none=np.empty((0, 9)),
+            last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
+            last_count=np.zeros(1, dtype=np.int64))
+        if last is not None:
+            kept = last.last_count[0]
+            work.last_key[:kept] = last.last_key[:kept]
+            work.last_lam[:kept] = last.last_lam[:kept]
+            work.last_count[0] = kept
+        return work
+
+    def forget(self):
+        """Drop the warm start: the next step solves from zero impulses (a reset)."""
+        self.work.last_count[0] = 0
+
+    def resolve(self, y, h, model):
+        """Resolve the contacts of ``y`` (N, 13), which a step of ``h`` s ended at, in place.
+
+        Returns how many contacts there were (0: ``y`` is unchanged).
+        """
+        while True:
+            found, pairs = self._call(y, model, self.parameters, h, self.work)
+            room = self.work.order.shape[0]
+            if found <= room and pairs <= self.work.pairs.shape[0]:
+                self.count = found
+                return found
+            self.work = self._room(max(room, 2 * found), max(self.work.pairs.shape[0],
+                                                             2 * pairs), self.work)
+
+    def probe(self, y, h, model):
+        """Compile (or load) the stage by one call on a copy of ``y``; nothing is changed.
+
+        The warm start, the scratch and the last step's contacts are kept as they were.
+        """
+        kept, count = self.work, self.count
+        self.work = self._room(kept.order.shape[0], kept.pairs.shape[0], kept)
+        try:
+            self.resolve(np.array(y, dtype=float), h, model)
+        finally:
+            self.work, self.count = kept, count
+
+    def contacts(self):
+        """Return the last step's contacts in key order: bodies (C, 2), points, normals, impulses.
+
+        ``bodies[:, 1] < 0`` names plane ``-1 - b``; points (C, 3) m and normals (C, 3)
+        world, the normal from the second body to the first; impulses (C, 3) N s, normal
+        then the two tangential components.
+        """
+        work, c = self.work, self.count
+        order = work.order[:c]
+        return (work.body[:c].copy(), work.contacts.point[order],
+                work.contacts.normal[order], work.lam[:c].copy())

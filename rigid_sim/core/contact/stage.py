@@ -1,0 +1,303 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""The compiled contact stage: detect, solve, correct, in one call after a World step.
+
+Detection reads the state the integrator's step ended at: every shape against every plane,
+then the broad phase's pairs through the narrow phase. The contacts are sorted by key, so
+their order (and the solve's floating-point operations) depend on the state alone, never on
+the order detection found them in; the same run gives the same bits. The solve
+(:mod:`~rigid_sim.core.contact.solver`) changes the momenta; the positions move by what
+friction would have moved them in the step, then by the split-impulse correction.
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from rigid_sim.core import kinematics as kin
+from rigid_sim.core.compiled import helper, kernel
+from rigid_sim.core.contact import narrow
+from rigid_sim.core.contact.broad import overlapping_pairs
+from rigid_sim.core.contact.solver import (
+    apply, coupling, friction_row, normal_row, relative_velocity, tangents,
+    world_inverse_inertia)
+
+SPHERE, BOX = 1, 2   # shape kinds; 0: no collision shape
+ROW = 24             # width of a contact's row of solver constants
+# A solve stops at the sweep whose largest change of an impulse is at most this fraction of
+# the largest impulse: further sweeps would change the velocities by round-off only.
+CONVERGED = 1e-12
+
+
+class ContactParameters(NamedTuple):
+    """What the compiled stage reads: the scene's contact settings and the bodies' shapes."""
+
+    planes: np.ndarray     # (P, 4): unit normal (world) and offset (m): n . x = offset
+    kind: np.ndarray       # (N,) int: 0 none, SPHERE, BOX
+    size: np.ndarray       # (N, 3) m: a sphere's radius in column 0; a box's half extents
+    offset: np.ndarray     # (N, 3) m, shape centre from the centre of mass, body axes
+    friction: float        # Coulomb coefficient mu
+    restitution: float     # Newton's e
+    resting_speed: float   # m/s: slower approaches do not bounce
+    compliance: float      # m/N: 0 rigid
+    iterations: int        # Gauss-Seidel sweeps, for the impulses and for the positions
+    margin: float          # m: features closer than this are contacts
+
+
+class ContactWork(NamedTuple):
+    """Scratch and memory of the stage; C contacts and M pairs of room, grown as needed."""
+
+    low: np.ndarray        # (N, 3) bounding box, m
+    high: np.ndarray       # (N, 3)
+    centre: np.ndarray     # (N, 3) shape centre, world, m
+    rotation: np.ndarray   # (N, 3, 3) body-to-world rotation
+    active: np.ndarray     # (N,) bool: has a collision shape
+    inertia: np.ndarray    # (N, 3, 3) world inverse inertia, 1/(kg m^2)
+    velocity: np.ndarray   # (N, 6) linear and angular velocity
+    impulse: np.ndarray    # (N, 9) this step's linear and angular impulse, N s, N m s;
+    # then friction's linear impulse alone
+    pseudo: np.ndarray     # (N, 6) position-correction velocities
+    pairs: np.ndarray      # (M, 2) int
+    contacts: narrow.Contacts
+    order: np.ndarray      # (C,) int: the contacts by key
+    rows: np.ndarray       # (C, ROW) solver constants, in key order
+    body: np.ndarray       # (C, 2) int bodies, in key order
+    lam: np.ndarray        # (C, 3) normal and tangential impulse, N s, in key order
+    push: np.ndarray       # (C, 1) position-correction impulse
+    none: np.ndarray       # (0, 9): the pseudo-solve keeps no impulse sums
+    last_key: np.ndarray   # (C,) int: the last step's keys, sorted
+    last_lam: np.ndarray   # (C, 3) and their impulses
+    last_count: np.ndarray  # (1,) int
+
+
+@helper
+def _shapes(y, model, parameters, work):
+    """Each body's shape centre, rotation, inverse world inertia and bounding box."""
+    for i in range(y.shape[0]):
+        x, q, p, big_l = kin.body_state(y, i)
+        r = kin.matrix(q)
+        inertia = world_inverse_inertia(r, kin.entries(model.inertia_inv, i))
+        for k in range(9):
+            work.rotation[i, k // 3, k % 3] = r[k]
+            work.inertia[i, k // 3, k % 3] = inertia[k]
+        kin.store(work.velocity, i, 0, kin.scaled(model.inverse_mass[i], p))
+        kin.store(work.velocity, i, 3, kin.rotate(inertia, big_l))
+        for k in range(9):
+            work.impulse[i, k] = 0.0
+        for k in range(6):
+            work.pseudo[i, k] = 0.0
+        centre = kin.add(x, kin.rotate(r, kin.vector(parameters.offset, i, 0)))
+        kin.store(work.centre, i, 0, centre)
+        kind = parameters.kind[i]
+        work.active[i] = kind != 0
+        for k in range(3):
+            if kind == SPHERE:
+                reach = parameters.size[i, 0]
+            else:
+                reach = (abs(r[3 * k]) * parameters.size[i, 0]
+                         + abs(r[3 * k + 1]) * parameters.size[i, 1]
+                         + abs(r[3 * k + 2]) * parameters.size[i, 2])
+            reach += parameters.margin   # shapes closer than the margin are in a pair
+            work.low[i, k] = centre[k] - reach
+            work.high[i, k] = centre[k] + reach
+
+
+@helper
+def _plane_contacts(parameters, work, slots):
+    """Every shape against every plane; returns the count of contacts (maybe above room)."""
+    count = 0
+    contacts, planes, margin = work.contacts, parameters.planes, parameters.margin
+    for i in range(work.centre.shape[0]):
+        kind = parameters.kind[i]
+        if kind == 0:
+            continue
+        centre = kin.vector(work.centre, i, 0)
+        for p in range(planes.shape[0]):
+            normal, offset = kin.vector(planes, p, 0), planes[p, 3]
+            if kind == SPHERE:
+                count = narrow.sphere_plane(contacts, count, i, -1 - p, slots, margin, centre,
+                                            parameters.size[i, 0], normal, offset)
+            else:
+                count = narrow.box_plane(contacts, count, i, -1 - p, slots, margin, centre,
+                                         kin.entries(work.rotation, i),
+                                         kin.vector(parameters.size, i, 0), normal, offset)
+    return count
+
+
+@helper
+def _pair_contacts(parameters, work, pairs, count, slots):
+    """Run the narrow phase of each of the first ``pairs`` pairs, after ``count`` contacts."""
+    contacts, kind, size = work.contacts, parameters.kind, parameters.size
+    margin = parameters.margin
+    for k in range(pairs):
+        a, b = work.pairs[k, 0], work.pairs[k, 1]
+        ca, cb = kin.vector(work.centre, a, 0), kin.vector(work.centre, b, 0)
+        ra, rb = kin.entries(work.rotation, a), kin.entries(work.rotation, b)
+        if kind[a] == SPHERE and kind[b] == SPHERE:
+            count = narrow.sphere_sphere(contacts, count, a, b, slots, margin, ca, size[a, 0],
+                                         cb, size[b, 0])
+        elif kind[a] == SPHERE:
+            count = narrow.sphere_box(contacts, count, a, b, slots, margin, ca, size[a, 0], cb,
+                                      rb, kin.vector(size, b, 0), False)
+        elif kind[b] == SPHERE:
+            count = narrow.sphere_box(contacts, count, a, b, slots, margin, cb, size[b, 0], ca,
+                                      ra, kin.vector(size, a, 0), True)
+        else:
+            count = narrow.box_box(contacts, count, a, b, slots, margin, ca, ra,
+                                   kin.vector(size, a, 0), cb, rb, kin.vector(size, b, 0))
+    return count
+
+
+@helper
+def _warm_start(work, key):
+    """Find the last step's row of the contact with ``key`` (-1: none), by binary search."""
+    low, high = 0, work.last_count[0]
+    while low < high:
+        middle = (low + high) // 2
+        if work.last_key[middle] < key:
+            low = middle + 1
+        else:
+            high = middle
+    if low < work.last_count[0] and work.last_key[low] == key:
+        return low
+    return -1
+
+
+@helper
+def _set_up(y, model, parameters, work, count, h):
+    """Each contact's row of constants, in key order, and its warm-started impulse."""
+    contacts, rows, inertia = work.contacts, work.rows, work.inertia
+    for s in range(count):
+        c = work.order[s]
+        a, b = contacts.body[c, 0], contacts.body[c, 1]
+        work.body[s, 0], work.body[s, 1] = a, b
+        point, n = kin.vector(contacts.point, c, 0), kin.vector(contacts.normal, c, 0)
+        arm_a = kin.plus_scaled(point, -1.0, kin.vector(y, a, 0))
+        arm_b = kin.plus_scaled(point, -1.0, kin.vector(y, b, 0)) if b >= 0 else arm_a
+        t1, t2 = tangents(n)
+        for k, v in enumerate((arm_a, arm_b, n, t1, t2)):
+            kin.store(rows, s, 3 * k, v)
+        m = model.inverse_mass
+        k11 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t1)
+        k12 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t2)
+        k22 = coupling(m, inertia, a, b, arm_a, arm_b, t2, t2)
+        # The largest eigenvalue of the 2x2 tangential mobility (friction_row says why).
+        big = 0.5 * (k11 + k22) + math.sqrt(0.25 * (k11 - k22) ** 2 + k12 * k12)
+        rows[s, 15] = 1.0 / big
+        kn = coupling(m, inertia, a, b, arm_a, arm_b, n, n)
+        rows[s, 18] = 1.0 / (kn + parameters.compliance / (h * h))
+        rows[s, 22] = 1.0 / kn
+        approach = kin.dot(n, relative_velocity(work.velocity, a, b, arm_a, arm_b))
+        distance = contacts.distance[c]
+        # A gap may close within the next step, no more (a speculative contact); an approach
+        # faster than the resting speed that would close it bounces now, at most the margin
+        # early.
+        closing = -distance / h if distance > 0.0 else 0.0
+        bounces = approach < -parameters.resting_speed and approach < closing
+        rows[s, 19] = -parameters.restitution * approach if bounces else closing
+        rows[s, 20] = approach
+        rows[s, 21] = distance
+        last = _warm_start(work, contacts.key[c])
+        for k in range(3):
+            work.lam[s, k] = work.last_lam[last, k] if last >= 0 else 0.0
+        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b,
+              kin.scaled(work.lam[s, 0], n), False)
+        friction = kin.add(kin.scaled(work.lam[s, 1], t1), kin.scaled(work.lam[s, 2], t2))
+        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b, friction, True)
+
+
+@helper
+def _solve(model, parameters, work, count, h):
+    """Gauss-Seidel sweeps of the impulses, then of the position correction."""
+    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    softness = parameters.compliance / (h * h)
+    # Sweeps of the normal impulses alone first: friction then starts from the weights
+    # the contacts carry, not from the rotations a first sweep's uneven pushes make. Each
+    # solve stops at the sweep that changes no impulse by more than CONVERGED of the
+    # largest: contacts that do not interact (balls on a floor) take one sweep.
+    for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
+        for s in range(count):
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                            softness, work.body, work.lam, rows[s, 19]))
+            largest = max(largest, work.lam[s, 0])
+        if change <= CONVERGED * largest:
+            break
+    for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
+        for s in range(count):
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                            softness, work.body, work.lam, rows[s, 19]))
+            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m, inertia,
+                                              parameters.friction, work.body, work.lam))
+            largest = max(largest, work.lam[s, 0])
+        if change <= CONVERGED * largest:
+            break
+    # The penetration is removed within the step.
+    for s in range(count):
+        rows[s, 23] = -rows[s, 21] / h
+        rows[s, 18] = rows[s, 22]   # the correction is rigid
+        work.push[s, 0] = 0.0
+    for _ in range(parameters.iterations):
+        change, largest = 0.0, 0.0
+        for s in range(count):
+            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, inertia, 0.0,
+                                            work.body, work.push, rows[s, 23]))
+            largest = max(largest, work.push[s, 0])
+        if change <= CONVERGED * largest:
+            break
+
+
+@helper
+def _move(y, model, work, h):
+    """Add the impulses to the momenta and move the touched bodies' positions."""
+    for i in range(y.shape[0]):
+        touched = False
+        for k in range(6):
+            touched = touched or work.impulse[i, k] != 0.0 or work.pseudo[i, k] != 0.0
+        if not touched:
+            continue
+        x, q, p, big_l = kin.body_state(y, i)
+        sliding = kin.vector(work.impulse, i, 6)
+        shift = kin.plus_scaled(kin.scaled(0.5 * h * model.inverse_mass[i], sliding), h,
+                                kin.vector(work.pseudo, i, 0))
+        turn = kin.scaled(h, kin.vector(work.pseudo, i, 3))
+        q = kin.normalize(kin.multiply(kin.exp_map(turn), q))
+        kin.store_body(y, i, kin.add(x, shift), q, kin.add(p, kin.vector(work.impulse, i, 0)),
+                       kin.add(big_l, kin.vector(work.impulse, i, 3)))
+
+
+@helper
+def _remember(work, count):
+    """Keep this step's keys and impulses, in key order, for the next step's warm start."""
+    for s in range(count):
+        work.last_key[s] = work.contacts.key[work.order[s]]
+        for k in range(3):
+            work.last_lam[s, k] = work.lam[s, k]
+    work.last_count[0] = count
+
+
+@kernel
+def contact_step(y, model, parameters, h, work):
+    """Resolve the contacts of the state ``y`` (N, 13) a step of ``h`` s ended at, in place.
+
+    Returns ``(contacts, pairs)``: how many of each were found. When either is above the
+    room of ``work`` nothing was changed: the caller grows ``work`` and calls again.
+    """
+    slots = y.shape[0] + parameters.planes.shape[0]
+    _shapes(y, model, parameters, work)
+    count = _plane_contacts(parameters, work, slots)
+    pairs = overlapping_pairs(work.low, work.high, work.active, work.pairs)
+    if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
+        return count, pairs
+    count = _pair_contacts(parameters, work, pairs, count, slots)
+    if count > work.order.shape[0]:
+        return count, pairs
+    order = np.argsort(work.contacts.key[:count], kind='mergesort')
+    for s in range(count):
+        work.order[s] = order[s]
+    _set_up(y, model, parameters, work, count, h)
+    _solve(model, parameters, work, count, h)
+    _move(y, model, work, h)
+    _remember(work, count)
+    return count, pairs

@@ -1,0 +1,18 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""``rigid_sim_bench contact --quick``: it runs, writes its section, and slides as physics says."""
+from rigid_sim.bench import cli
+
+
+def test_quick_contact_bench_writes_its_section(tmp_path):
+    """The section names MuJoCo's version; rigid_sim's 45 degree slide stops at v0^2/(2 mu g)."""
+    out = tmp_path / 'contact.md'
+    args = cli.build_parser().parse_args(['contact', '--quick', '--out', str(out),
+                                          '--plot', str(tmp_path / 'contact.png')])
+    results = args.run(args)
+    text = out.read_text()
+    assert '<!-- rigid_sim_bench contact: begin -->' in text and 'MuJoCo 4.0.1' in text
+    assert abs(results['slide']['rigid_sim']) < 0.005
+    assert (tmp_path / 'contact.png').stat().st_size > 0
+    drift, overlap, _ = results['stack']['rigid_sim']
+    assert drift < 1e-4 and overlap < 1e-3
