@@ -118,8 +118,7 @@ def test_a_scene_edit_is_built_off_the_executor_while_the_node_ticks(rigid_sim):
             '<pose>{x} 0 0 0 0 0</pose><mass>1</mass><inertia><ixx>1</ixx><iyy>1</iyy>'
             '<izz>1</izz></inertia></inertial><collision name="c"><geometry><sphere>'
             '<radius>0.5</radius></sphere></geometry></collision></link></model></sdf>')])
-def test_a_models_centre_of_mass_is_held_to_the_bound_of_every_scene_number(spawn_format,
-                                                                             model):
+def test_a_models_centre_of_mass_is_held_to_the_bound_of_scene_numbers(spawn_format, model):
     """A URDF or SDF inertial origin 1e300 m away would overflow the state at the first turn.
 
     The scene format bounds every number by 1e15 (a shape's centre of mass is inside it);
