@@ -218,6 +218,10 @@ class SpawnServices:
         uri, text, renaming = request.uri, request.resource_string, request.allow_renaming
         settings = self._node.settings
         limits = settings.resource_limits   # the operator's, as for the scene
+        if len(text) > limits['max_scene_bytes']:   # refused before any parser reads it
+            raise SpawnRefused('parse', f'resource_string: {len(text)} characters, above '
+                                        f'the limit of {limits["max_scene_bytes"]} bytes of '
+                                        'a scene (parameter max_scene_bytes)')
         paths, roots = settings.resource_paths, allowed_roots(settings.resource_paths)
 
         def resolver(base_dir):

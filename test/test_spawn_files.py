@@ -347,6 +347,18 @@ def test_models_not_served_are_refused_with_the_standards_code(sim, resource, co
     assert (got, words in message) == (code, True), message
 
 
+def test_a_resource_string_above_the_scene_size_limit_is_refused_unparsed(sim):
+    """A 16 MiB XML text is as much work as a 16 MiB scene: the same limit holds it.
+
+    Parsing 40 MB of URDF took 11 s and 1.4 GB of memory in the node; above
+    max_scene_bytes (16 MiB by default) the text is refused before any parser reads it.
+    """
+    padded = '<robot name="r">' + ' ' * (16 << 20) + '</robot>'
+    got, message, _ = spawn(sim, 'big', padded)
+    assert got == CODES.RESOURCE_PARSE_ERROR
+    assert f'{len(padded)} characters, above the limit of {16 << 20} bytes' in message
+
+
 def test_uris_of_formats_and_schemes_not_served_are_unsupported_formats(sim):
     (sim.folder / 'arm.xacro').write_text(URDF)
     for uri in ('arm.xacro', 'https://example.com/model.urdf'):
