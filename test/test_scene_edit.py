@@ -6,6 +6,7 @@ The edit's world is built from the new Scene and given the old one's state, time
 wrenches; the node side (a worker thread, the swap between two ticks) is tested over DDS in
 test_sim_interfaces.py, and here the scene editor's build is checked to run off the executor.
 """
+from dataclasses import replace
 import threading
 
 import numpy as np
@@ -134,3 +135,21 @@ def test_a_models_centre_of_mass_is_held_to_the_bound_of_scene_numbers(spawn_for
                                                r'must be at most 1e\+15') as refused:
             checked_body(entry, scene, center_of_mass=center)
         assert refused.value.kind == 'parse'
+
+
+def test_spawned_points_count_with_the_scenes_towards_max_points():
+    """A spawn flood of bodies with points would make every swap's /tf_static grow without end.
+
+    The running scene's points and the spawned body's together are held to max_points.
+    """
+    scene, _ = running()
+    scene = replace(scene, work_limits={**scene.work_limits, 'max_bodies': 9, 'max_points': 3})
+    two = ('{name: %s, shape: {type: sphere, radius: 0.1}, mass: 1.0, '
+           'points: {p: [0, 0, 0], q: [0, 0, 0]}}')
+    first = body_from_text(two % 'd', scene)
+    scene = with_bodies(scene, [first])
+    with pytest.raises(SpawnRefused, match=r'2 named points and 2 more are above the scene '
+                                           r'limit of 3 \(limits.max_points\)'):
+        with_bodies(scene, [body_from_text(two % 'e', scene)])
+    one = '{name: e, shape: {type: sphere, radius: 0.1}, mass: 1.0, points: {p: [0, 0, 0]}}'
+    assert with_bodies(scene, [body_from_text(one, scene)]).bodies[-1].name == 'e'

@@ -172,6 +172,12 @@ def with_bodies(scene, added, springs=()):
     if len(scene.bodies) + len(added) > limit:
         raise SpawnRefused('parse', f'{len(scene.bodies)} bodies and {len(added)} more are '
                                     f'above the scene limit of {limit} (limits.max_bodies)')
+    named = sum(len(body.points) for body in scene.bodies)
+    adding = sum(len(body.points) for body in added)
+    limit = scene.work_limits['max_points']
+    if named + adding > limit:   # all points are frames of every swap's /tf_static
+        raise SpawnRefused('parse', f'{named} named points and {adding} more are above the '
+                                    f'scene limit of {limit} (limits.max_points)')
     taken = {body.name for body in scene.bodies}
     for body in added:
         if body.name in taken:
