@@ -84,12 +84,12 @@ class Reconfiguration:
     def _heavy_change(self, running):
         return any(getattr(self.accepted, name) != getattr(running, name) for name in HEAVY)
 
-    def _start(self):
+    def _start(self, first=False):
         if self._job is not None:   # it prepares the newest when it begins, or again after
             return
         self._job = Job(self._begin, self._conclude)
         self._job.scene_changed = False
-        self._node.owner.submit(self._job)
+        self._node.owner.submit(self._job, first)
 
     def _begin(self, scene, world, running):
         """Decide what the job prepares when its turn comes: the newest parameters."""
@@ -110,7 +110,9 @@ class Reconfiguration:
     def _conclude(self, done):
         job, self._job = self._job, None
         if job.settings != self.accepted or self._scene_asked:   # asked again meanwhile
-            self._start()
+            # Before the edits queued meanwhile, which were asked after it: a spawn answered
+            # OK must not be lost to a reload it was asked after.
+            self._start(first=True)
         elif done.error is None:
             self._node.swap(job.settings, done.result)
         else:

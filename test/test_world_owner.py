@@ -195,6 +195,26 @@ def test_a_spawn_asked_during_a_scene_reload_is_made_in_the_reloaded_scene(sim, 
     assert_ball_falls(sim)
 
 
+def test_a_spawn_after_a_scene_set_twice_is_not_lost_to_the_second_load(sim, tmp_path):
+    """The scene set again while it loads is loaded before the spawn asked after both.
+
+    Found by a client setting ``scene`` and spawning in turn: the second load went behind
+    the spawns queued meanwhile, so bodies answered OK vanished with it.
+    """
+    other = tmp_path / 'other.yaml'
+    other.write_text(OTHER)
+    gate = gate_prepare(sim)
+    assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
+    assert gate.entered.wait(WAIT)          # loading, held
+    assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
+    answers = ask_spawn(sim)
+    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+
+
 def test_a_stale_preparation_is_begun_again_from_what_runs(sim, monkeypatch):
     """A setting applied to the running world while a spawn is built stales the spawn."""
     gate = gate_spawn(monkeypatch)
