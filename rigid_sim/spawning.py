@@ -170,7 +170,8 @@ def entity_name(own, name, renaming, taken):
                                                'or allow_renaming for a generated one')
         chosen = GENERATED_NAME
     chosen = check_name(chosen)
-    return free_name(chosen, taken) if renaming else chosen
+    # A free name is one more name: <name>_1 of a 100-character name is over the limit.
+    return check_name(free_name(chosen, taken)) if renaming else chosen
 
 
 def free_name(name, taken):

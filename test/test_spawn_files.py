@@ -391,3 +391,20 @@ def test_a_uri_spawns_one_entity_and_drops_none_of_its_effects_in_silence(sim):
     code, message, _ = spawn(sim, uri='falling.yaml')
     assert code == CODES.RESOURCE_PARSE_ERROR and "['gravity']" in message
     assert list(sim.call('get_entities').entities) == ['anchor']
+
+
+def test_a_renamed_name_is_held_to_the_name_limit_as_any_name_is(sim):
+    """A body name is at most 100 characters (it becomes topic and frame names).
+
+    Renaming a taken 100-character name gives ``<name>_1``, 102 characters: refused as an
+    invalid name, whether the body comes from a uri file or a resource_string.
+    """
+    longest = 'n' * 100
+    body = '{name: %s, shape: {type: sphere, radius: 0.1}, mass: 1.0}' % longest
+    (sim.folder / 'long.yaml').write_text(f'bodies:\n  - {body}\n')
+    assert spawn(sim, uri='long.yaml', renaming=True)[::2] == (OK, longest)
+    for request in ({'uri': 'long.yaml'}, {'resource': body}):
+        code, message, name = spawn(sim, renaming=True, **request)
+        assert (code, name) == (CODES.NAME_INVALID, ''), message
+        assert 'at most 100' in message
+    assert list(sim.call('get_entities').entities) == ['anchor', longest]
