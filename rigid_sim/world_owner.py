@@ -92,16 +92,9 @@ class WorldOwner:
         """Whether a job runs or waits for its turn."""
         return self._running is not None or bool(self._queue)
 
-    def submit(self, job, first=False):
-        """Queue ``job``; it begins when every job asked before it has ended.
-
-        With ``first`` it begins before the queued ones: the rest of a job that just ended
-        (what was asked of it while it ran), which the jobs queued meanwhile must start from.
-        """
-        if first:
-            self._queue.appendleft(job)
-        else:
-            self._queue.append(job)
+    def submit(self, job):
+        """Queue ``job``; it begins when every job asked before it has ended."""
+        self._queue.append(job)
         self._next()
 
     def changed(self):

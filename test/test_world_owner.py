@@ -216,6 +216,36 @@ def test_a_spawn_after_a_scene_set_twice_is_not_lost_to_the_second_load(sim, tmp
     assert sim.node.world.bodies.names == ('crate', 'ball')
 
 
+def test_a_spawn_asked_before_a_parameter_is_set_again_is_not_held_behind_it(sim):
+    """A flood of parameter sets must not starve an edit asked before them.
+
+    The tolerance set again while its preparation runs is queued then, behind the spawn
+    already waiting: the spawn is made before that second preparation begins.
+    """
+    node, order, answers = sim.node, [], []
+    gate = gate_prepare(sim)
+    held = node.prepare
+
+    def prepare(*args):
+        order.append('prepare')
+        return held(*args)
+
+    def answered(response):
+        order.append('spawned')
+        answers.append(response)
+    node.prepare = prepare
+    assert node.set_parameters([Parameter('tolerance', value=1e-7)])[0].successful
+    assert gate.entered.wait(WAIT)          # preparing, held
+    node.sim_interfaces.spawns._on_spawn(SpawnEntity.Request(resource_string=BALL),
+                                         SpawnEntity.Response(), answered)
+    assert node.set_parameters([Parameter('tolerance', value=2e-7)])[0].successful
+    gate.open()
+    finish(sim)
+    assert order == ['prepare', 'spawned', 'prepare']
+    assert answers[0].result.result == Result.RESULT_OK
+    assert node.settings.tolerance == 2e-7 and node.world.bodies.names == ('box', 'ball')
+
+
 def test_a_stale_preparation_is_begun_again_from_what_runs(sim, monkeypatch):
     """A setting applied to the running world while a spawn is built stales the spawn."""
     gate = gate_spawn(monkeypatch)
