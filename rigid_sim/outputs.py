@@ -67,6 +67,7 @@ class StateOutputs:
         self._world_frame = world_frame
         self._tf = TfOutput(node)
         self._bodies = []            # per body: its publishers, in BODY_TOPICS order
+        self._names = []             # per body: its topics' names, in BODY_TOPICS order
         self._messages = None        # conversions.StateMessages of the scene
         self._tf_message = None      # TFMessage of the messages' transforms (None: no tf)
         self._listened = []          # per body: a bool per publisher
@@ -103,18 +104,24 @@ class StateOutputs:
             plan = self.plan(scene, world_frame, frame_prefix, self.per_body_limit)
         if self._messages is not None:
             self._markers.publish(conversions.delete_all_markers())
-        for publishers in self._bodies:
-            for publisher in publishers:
-                if publisher is not None:
-                    self._node.destroy_publisher(publisher)
-        replaced = self._bodies
+        # A body kept by a scene edit keeps its publishers: making and destroying every
+        # body's at each spawn held control 0.1-0.7 s.
+        kept = {name: publisher for names, publishers in zip(self._names, self._bodies)
+                for name, publisher in zip(names, publishers) if publisher is not None}
+        replaced, self._names = self._bodies, plan.names
         if plan.awaited is None:
             self._awaited = {}
-            self._bodies = [[self._made(slot, name) for slot, name in enumerate(row)]
-                            for row in plan.names]
+            self._bodies = [[kept.pop(name) if name in kept else self._made(slot, name)
+                             for slot, name in enumerate(row)] for row in plan.names]
         else:
             self._awaited = plan.awaited
             self._bodies = [[None] * len(BODY_TOPICS) for _ in plan.names]
+            for name, publisher in list(kept.items()):
+                index, slot = self._awaited.pop(publisher.topic_name, (None, None))
+                if index is not None:
+                    self._bodies[index][slot] = kept.pop(name)
+        for publisher in kept.values():
+            self._node.destroy_publisher(publisher)
         return replaced, self.set_frame(scene, world_frame, frame_prefix, plan.frame)
 
     def _made(self, slot, name):

@@ -83,6 +83,7 @@ class Settings:
     max_samples: int       # inertia samples of all bodies together
     max_mesh_bytes: int    # bytes of all distinct mesh files together
     max_mesh_faces: int    # faces of one mesh
+    max_points: int        # named points of all bodies together
     goal_horizon: float    # s of simulated time to a ~/<body>/goal stamped zero or in the past
 
     @property
@@ -171,7 +172,8 @@ SPECS = {
            ('max_bodies', 'bodies a scene may have at most'),
            ('max_samples', 'inertia samples all bodies of a scene may draw together'),
            ('max_mesh_bytes', 'bytes of all distinct mesh files of a scene together'),
-           ('max_mesh_faces', 'faces of one mesh at most'))},
+           ('max_mesh_faces', 'faces of one mesh at most'),
+           ('max_points', 'named points of all bodies of a scene together'))},
     'goal_horizon': Spec(float, 'seconds of simulated time from now to a ~/<body>/goal whose '
                                 'stamp is zero or not in the future', 1e-6, 1.0e4),
 }

@@ -14,6 +14,7 @@ The preparation is a job of the node's :class:`~rigid_sim.world_owner.WorldOwner
 with scene edits, and swapped in by it.
 """
 from dataclasses import replace
+from functools import partial
 
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.parameter import Parameter
@@ -42,7 +43,8 @@ class Reconfiguration:
         self.accepted = node.settings   # what the parameters say; node.settings is what runs
         self.last_refusal = ''
         self._proposed = None
-        self._job = None                # the preparation asked for, queued or running
+        self._job = None                # the preparation asked for, queued, not begun
+        self._running = None            # the preparation begun, until it concludes
         self._reverting = False
         self._scene_asked = False       # the scene was set again since the last preparation
         node.add_on_set_parameters_callback(self._on_set)
@@ -51,7 +53,7 @@ class Reconfiguration:
     @property
     def preparing(self):
         """Return whether a preparation waits, runs or waits to be swapped in."""
-        return self._job is not None
+        return self._job is not None or self._running is not None
 
     def _on_set(self, changes):
         try:
@@ -85,15 +87,22 @@ class Reconfiguration:
         return any(getattr(self.accepted, name) != getattr(running, name) for name in HEAVY)
 
     def _start(self):
-        if self._job is not None:   # it prepares the newest when it begins, or again after
+        # A change asked while one is prepared is queued at once, in turn with the edits:
+        # an edit asked after it starts from it (a spawn is not lost to a later-run load),
+        # and one asked before it is not held back behind it (no starving under a flood).
+        if self._job is not None:   # queued: it prepares the newest when it begins
             return
-        self._job = Job(self._begin, self._conclude)
-        self._job.scene_changed = False
-        self._node.owner.submit(self._job)
+        job = self._job = Job(None, None)
+        job.begin, job.conclude = partial(self._begin, job), partial(self._conclude, job)
+        job.scene_changed = False
+        self._node.owner.submit(job)
 
-    def _begin(self, scene, world, running):
-        """Decide what the job prepares when its turn comes: the newest parameters."""
-        job, node = self._job, self._node
+    def _begin(self, job, scene, world, running):
+        """Decide what ``job`` prepares when its turn comes (again): the newest parameters."""
+        node = self._node
+        if self._job is job:
+            self._job = None
+        self._running = job
         job.scene_changed |= self._scene_asked or self.accepted.scene != running.scene
         self._scene_asked = False
         settings = job.settings = self.accepted
@@ -107,9 +116,11 @@ class Reconfiguration:
         """
         return self._node.owner.wait(timeout)
 
-    def _conclude(self, done):
-        job, self._job = self._job, None
-        if job.settings != self.accepted or self._scene_asked:   # asked again meanwhile
+    def _conclude(self, job, done):
+        self._running = None
+        if self._job is not None:   # asked again meanwhile: that one, queued, prepares it
+            return
+        if job.settings != self.accepted or self._scene_asked:   # set back meanwhile
             self._start()
         elif done.error is None:
             self._node.swap(job.settings, done.result)

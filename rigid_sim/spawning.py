@@ -170,7 +170,8 @@ def entity_name(own, name, renaming, taken):
                                                'or allow_renaming for a generated one')
         chosen = GENERATED_NAME
     chosen = check_name(chosen)
-    return free_name(chosen, taken) if renaming else chosen
+    # A free name is one more name: <name>_1 of a 100-character name is over the limit.
+    return check_name(free_name(chosen, taken)) if renaming else chosen
 
 
 def free_name(name, taken):
@@ -218,6 +219,10 @@ class SpawnServices:
         uri, text, renaming = request.uri, request.resource_string, request.allow_renaming
         settings = self._node.settings
         limits = settings.resource_limits   # the operator's, as for the scene
+        if len(text) > limits['max_scene_bytes']:   # refused before any parser reads it
+            raise SpawnRefused('parse', f'resource_string: {len(text)} characters, above '
+                                        f'the limit of {limits["max_scene_bytes"]} bytes of '
+                                        'a scene (parameter max_scene_bytes)')
         paths, roots = settings.resource_paths, allowed_roots(settings.resource_paths)
 
         def resolver(base_dir):

@@ -6,6 +6,7 @@ The edit's world is built from the new Scene and given the old one's state, time
 wrenches; the node side (a worker thread, the swap between two ticks) is tested over DDS in
 test_sim_interfaces.py, and here the scene editor's build is checked to run off the executor.
 """
+from dataclasses import replace
 import threading
 
 import numpy as np
@@ -15,7 +16,8 @@ import yaml
 from rigid_sim.core.integrators import DEFAULT_INTEGRATOR
 from rigid_sim.core.scene import build_world, parse_scene
 from rigid_sim.core.scene_edit import (
-    body_from_text, carry_over, placed, SpawnRefused, with_bodies, without_body)
+    body_from_text, carry_over, checked_body, entry_from_model, placed, SpawnRefused,
+    with_bodies, without_body)
 
 SCENE = """
 limits: {max_bodies: 3}
@@ -106,3 +108,48 @@ def test_a_scene_edit_is_built_off_the_executor_while_the_node_ticks(rigid_sim):
     release.set()
     assert editor.wait(30.0)
     assert sim.node.world.bodies.names == ('b', 'c') and outcomes[0][2] == ''
+
+
+@pytest.mark.parametrize('spawn_format, model', [
+    ('urdf', '<robot name="far"><link name="l"><inertial><origin xyz="{x} 0 0"/>'
+             '<mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+             '</inertial><collision><geometry><sphere radius="0.5"/></geometry></collision>'
+             '</link></robot>'),
+    ('sdf', '<sdf version="1.9"><model name="far"><link name="l"><inertial>'
+            '<pose>{x} 0 0 0 0 0</pose><mass>1</mass><inertia><ixx>1</ixx><iyy>1</iyy>'
+            '<izz>1</izz></inertia></inertial><collision name="c"><geometry><sphere>'
+            '<radius>0.5</radius></sphere></geometry></collision></link></model></sdf>')])
+def test_a_models_centre_of_mass_is_held_to_the_bound_of_scene_numbers(spawn_format, model):
+    """A URDF or SDF inertial origin 1e300 m away would overflow the state at the first turn.
+
+    The scene format bounds every number by 1e15 (a shape's centre of mass is inside it);
+    a model gives the centre of mass itself, so it is held to the same bound.
+    """
+    scene, _ = running()
+    near = entry_from_model(model.format(x='1000.0'), spawn_format, lambda uri: uri)
+    body = checked_body(near[0], scene, center_of_mass=near[1])
+    assert body.mass_properties.center_of_mass.tolist() == [1000.0, 0.0, 0.0]
+    for far in ('1e16', '1e300'):
+        entry, center = entry_from_model(model.format(x=far), spawn_format, lambda uri: uri)
+        with pytest.raises(SpawnRefused, match=r'inertial origin \(the centre of mass\)\[0\]: '
+                                               r'must be at most 1e\+15') as refused:
+            checked_body(entry, scene, center_of_mass=center)
+        assert refused.value.kind == 'parse'
+
+
+def test_spawned_points_count_with_the_scenes_towards_max_points():
+    """A spawn flood of bodies with points would make every swap's /tf_static grow without end.
+
+    The running scene's points and the spawned body's together are held to max_points.
+    """
+    scene, _ = running()
+    scene = replace(scene, work_limits={**scene.work_limits, 'max_bodies': 9, 'max_points': 3})
+    two = ('{name: %s, shape: {type: sphere, radius: 0.1}, mass: 1.0, '
+           'points: {p: [0, 0, 0], q: [0, 0, 0]}}')
+    first = body_from_text(two % 'd', scene)
+    scene = with_bodies(scene, [first])
+    with pytest.raises(SpawnRefused, match=r'2 named points and 2 more are above the scene '
+                                           r'limit of 3 \(limits.max_points\)'):
+        with_bodies(scene, [body_from_text(two % 'e', scene)])
+    one = '{name: e, shape: {type: sphere, radius: 0.1}, mass: 1.0, points: {p: [0, 0, 0]}}'
+    assert with_bodies(scene, [body_from_text(one, scene)]).bodies[-1].name == 'e'

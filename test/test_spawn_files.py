@@ -347,6 +347,18 @@ def test_models_not_served_are_refused_with_the_standards_code(sim, resource, co
     assert (got, words in message) == (code, True), message
 
 
+def test_a_resource_string_above_the_scene_size_limit_is_refused_unparsed(sim):
+    """A 16 MiB XML text is as much work as a 16 MiB scene: the same limit holds it.
+
+    Parsing 40 MB of URDF took 11 s and 1.4 GB of memory in the node; above
+    max_scene_bytes (16 MiB by default) the text is refused before any parser reads it.
+    """
+    padded = '<robot name="r">' + ' ' * (16 << 20) + '</robot>'
+    got, message, _ = spawn(sim, 'big', padded)
+    assert got == CODES.RESOURCE_PARSE_ERROR
+    assert f'{len(padded)} characters, above the limit of {16 << 20} bytes' in message
+
+
 def test_uris_of_formats_and_schemes_not_served_are_unsupported_formats(sim):
     (sim.folder / 'arm.xacro').write_text(URDF)
     for uri in ('arm.xacro', 'https://example.com/model.urdf'):
@@ -379,3 +391,20 @@ def test_a_uri_spawns_one_entity_and_drops_none_of_its_effects_in_silence(sim):
     code, message, _ = spawn(sim, uri='falling.yaml')
     assert code == CODES.RESOURCE_PARSE_ERROR and "['gravity']" in message
     assert list(sim.call('get_entities').entities) == ['anchor']
+
+
+def test_a_renamed_name_is_held_to_the_name_limit_as_any_name_is(sim):
+    """A body name is at most 100 characters (it becomes topic and frame names).
+
+    Renaming a taken 100-character name gives ``<name>_1``, 102 characters: refused as an
+    invalid name, whether the body comes from a uri file or a resource_string.
+    """
+    longest = 'n' * 100
+    body = '{name: %s, shape: {type: sphere, radius: 0.1}, mass: 1.0}' % longest
+    (sim.folder / 'long.yaml').write_text(f'bodies:\n  - {body}\n')
+    assert spawn(sim, uri='long.yaml', renaming=True)[::2] == (OK, longest)
+    for request in ({'uri': 'long.yaml'}, {'resource': body}):
+        code, message, name = spawn(sim, renaming=True, **request)
+        assert (code, name) == (CODES.NAME_INVALID, ''), message
+        assert 'at most 100' in message
+    assert list(sim.call('get_entities').entities) == ['anchor', longest]

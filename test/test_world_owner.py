@@ -11,6 +11,7 @@ spawned body falls as a body under gravity g alone, ``g t^2 / 2`` from rest.
 """
 import threading
 
+from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
@@ -195,6 +196,56 @@ def test_a_spawn_asked_during_a_scene_reload_is_made_in_the_reloaded_scene(sim, 
     assert_ball_falls(sim)
 
 
+def test_a_spawn_after_a_scene_set_twice_is_not_lost_to_the_second_load(sim, tmp_path):
+    """The scene set again while it loads is loaded before the spawn asked after both.
+
+    Found by a client setting ``scene`` and spawning in turn: the second load went behind
+    the spawns queued meanwhile, so bodies answered OK vanished with it.
+    """
+    other = tmp_path / 'other.yaml'
+    other.write_text(OTHER)
+    gate = gate_prepare(sim)
+    assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
+    assert gate.entered.wait(WAIT)          # loading, held
+    assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
+    answers = ask_spawn(sim)
+    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert sim.node.world.bodies.names == ('crate', 'ball')
+
+
+def test_a_spawn_asked_before_a_parameter_is_set_again_is_not_held_behind_it(sim):
+    """A flood of parameter sets must not starve an edit asked before them.
+
+    The tolerance set again while its preparation runs is queued then, behind the spawn
+    already waiting: the spawn is made before that second preparation begins.
+    """
+    node, order, answers = sim.node, [], []
+    gate = gate_prepare(sim)
+    held = node.prepare
+
+    def prepare(*args):
+        order.append('prepare')
+        return held(*args)
+
+    def answered(response):
+        order.append('spawned')
+        answers.append(response)
+    node.prepare = prepare
+    assert node.set_parameters([Parameter('tolerance', value=1e-7)])[0].successful
+    assert gate.entered.wait(WAIT)          # preparing, held
+    node.sim_interfaces.spawns._on_spawn(SpawnEntity.Request(resource_string=BALL),
+                                         SpawnEntity.Response(), answered)
+    assert node.set_parameters([Parameter('tolerance', value=2e-7)])[0].successful
+    gate.open()
+    finish(sim)
+    assert order == ['prepare', 'spawned', 'prepare']
+    assert answers[0].result.result == Result.RESULT_OK
+    assert node.settings.tolerance == 2e-7 and node.world.bodies.names == ('box', 'ball')
+
+
 def test_a_stale_preparation_is_begun_again_from_what_runs(sim, monkeypatch):
     """A setting applied to the running world while a spawn is built stales the spawn."""
     gate = gate_spawn(monkeypatch)
@@ -279,3 +330,43 @@ def test_deleting_a_body_whose_spawn_is_pending_deletes_it_after_the_spawn(sim, 
     missing = sim.node.sim_interfaces.spawns._on_delete(   # nothing pending: answered now
         DeleteEntity.Request(entity='ball'), DeleteEntity.Response(), None)
     assert missing.result.result == Result.RESULT_NOT_FOUND
+
+
+TWO = """
+bodies:
+  - {name: a, shape: {type: box, size: [0.2, 0.2, 0.2]}, mass: 1.0}
+  - {name: b, shape: {type: box, size: [0.2, 0.2, 0.2]}, mass: 2.0,
+     pose: {position: [5.0, 0.0, 0.0]}}
+"""
+
+
+def test_a_kept_body_keeps_its_topics_across_edits_and_its_wrench_follows_it(rigid_sim):
+    """A spawn or delete makes and destroys the topics of the bodies it adds or removes only.
+
+    Remaking every body's topics at each swap held control 0.1-0.7 s per spawn in a flood.
+    b's wrench subscription outlives the spawn of ball and the delete of a, which moves b
+    from index 1 to 0, and its wrench still pushes b alone: F / m = 1 m/s^2 for 0.1 s.
+    """
+    sim = rigid_sim(yaml=TWO, time_step=DT, start_paused=True, wrench_timeout=0.0)
+    node = sim.node
+    listened = node.inputs._subscribed[('wrench', 'b')][0]
+    published = list(node.outputs._bodies[1])
+    answers = []
+    node.sim_interfaces.spawns._on_spawn(SpawnEntity.Request(resource_string=BALL),
+                                         SpawnEntity.Response(), answers.append)
+    node.sim_interfaces.spawns._on_delete(DeleteEntity.Request(entity='a'),
+                                          DeleteEntity.Response(), answers.append)
+    finish(sim)
+    assert [answer.result.result for answer in answers] == [Result.RESULT_OK] * 2
+    assert node.world.bodies.names == ('b', 'ball')
+    assert node.inputs._subscribed[('wrench', 'b')][0] is listened
+    assert node.outputs._bodies[0] == published
+    push = sim.create_node('pusher').create_publisher(WrenchStamped, sim.topic('b/wrench'), 10)
+    wrench = WrenchStamped()
+    wrench.header.frame_id = 'world'
+    wrench.wrench.force.x = 2.0
+    push.publish(wrench)
+    sim.resume()
+    sim.step(10)
+    np.testing.assert_allclose(sim.state('b').velocity, [0.1, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(sim.state('ball').velocity, [0.0, 0.0, 0.0], atol=1e-12)

@@ -191,6 +191,7 @@ def parse_body(value, key, budget, has_field):
     Mistake naming the entry's ``key`` path and the reason.
     """
     body = fields(value, key, BODY)
+    budget.draw_points(len(body['points']), f'{key}.points')
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
         raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
@@ -341,8 +342,9 @@ def load_scene(path, roots=None, **limits):
     duplicate keys, after the checks of :mod:`rigid_sim.core.scene_file`: a regular file of
     at most ``max_scene_bytes`` of UTF-8, nested at most MAX_DEPTH deep, at most MAX_NODES
     nodes. ``limits`` are the operator's resource limits, by name (``max_scene_bytes=``,
-    ``max_bodies=``, ``max_samples=``, ``max_mesh_bytes=``, ``max_mesh_faces=``); the
-    defaults of :data:`rigid_sim.core.scene_limits.RESOURCE_LIMITS` otherwise.
+    ``max_bodies=``, ``max_samples=``, ``max_mesh_bytes=``, ``max_mesh_faces=``,
+    ``max_points=``); the defaults of :data:`rigid_sim.core.scene_limits.RESOURCE_LIMITS`
+    otherwise.
     """
     allowed = operator_limits(limits)
     try:

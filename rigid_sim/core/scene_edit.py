@@ -23,7 +23,7 @@ from rigid_sim.core import body_state
 from rigid_sim.core.scene import (
     load_scene, parse_body, SceneError, world_frame_clash)
 from rigid_sim.core.robot_description import DescriptionRefused, model_body
-from rigid_sim.core.scene_fields import describe, Mistake, token
+from rigid_sim.core.scene_fields import describe, Mistake, token, vector
 from rigid_sim.core.scene_file import FileRefused, MAX_SCENE_BYTES, parse_yaml
 from rigid_sim.core.scene_limits import Budget
 
@@ -109,8 +109,12 @@ def checked_body(entry, scene, base_dir='.', roots=None, center_of_mass=None,
                                         mistake.reason)) from None
     if center_of_mass is None:
         return body
-    properties = replace(body.mass_properties,
-                         center_of_mass=np.asarray(center_of_mass, dtype=float))
+    try:   # held to the bound of every scene number, as the shape's would be
+        center = vector(np.asarray(center_of_mass, dtype=float).tolist(),
+                        'inertial origin (the centre of mass)')
+    except Mistake as mistake:
+        raise SpawnRefused('parse', f'{where}: {mistake.key}: {mistake.reason}') from None
+    properties = replace(body.mass_properties, center_of_mass=center)
     return replace(body, mass_properties=properties)
 
 
@@ -168,6 +172,12 @@ def with_bodies(scene, added, springs=()):
     if len(scene.bodies) + len(added) > limit:
         raise SpawnRefused('parse', f'{len(scene.bodies)} bodies and {len(added)} more are '
                                     f'above the scene limit of {limit} (limits.max_bodies)')
+    named = sum(len(body.points) for body in scene.bodies)
+    adding = sum(len(body.points) for body in added)
+    limit = scene.work_limits['max_points']
+    if named + adding > limit:   # all points are frames of every swap's /tf_static
+        raise SpawnRefused('parse', f'{named} named points and {adding} more are above the '
+                                    f'scene limit of {limit} (limits.max_points)')
     taken = {body.name for body in scene.bodies}
     for body in added:
         if body.name in taken:
