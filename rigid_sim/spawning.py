@@ -43,6 +43,9 @@ SPAWN_CODES = {'name_taken': 'NAME_NOT_UNIQUE', 'name_invalid': 'NAME_INVALID',
                'parse': 'RESOURCE_PARSE_ERROR', 'unsupported': 'UNSUPPORTED_FORMAT',
                'missing_asset': 'MISSING_ASSETS', 'pose': 'INVALID_POSE',
                'no_resource': 'NO_RESOURCE'}
+# Edits a client may have waiting at once: each holds its request, and a new scene while it
+# is prepared; past this a spawn or delete is refused at once, not queued.
+MAX_PENDING_EDITS = 64
 GENERATED_NAME = 'body'   # what an unnamed spawn with allow_renaming is called, then _1, ...
 
 
@@ -287,6 +290,8 @@ class SpawnServices:
                                      'entity_namespace: a body\'s topics are ~/<name>/...; '
                                      'leave it empty')
             return response
+        if self._too_many_pending(response):
+            return response
         try:
             build = self._spawn_builder(request)
         except SpawnRefused as refused:
@@ -307,9 +312,22 @@ class SpawnServices:
         self._editor.submit(build, done)
         return deferred.LATER
 
+    def _too_many_pending(self, response):
+        """Refuse into ``response`` (and say so) when MAX_PENDING_EDITS edits wait already."""
+        if self._node.owner.pending < MAX_PENDING_EDITS:
+            return False
+        reason = (f'{MAX_PENDING_EDITS} scene edits are pending, the most the node queues: '
+                  'ask again once some are answered')
+        response.result = result(si_msg.Result.RESULT_OPERATION_FAILED, reason)
+        self._node.get_logger().warning(f'refused a scene edit: {reason}',
+                                        throttle_duration_sec=2.0)
+        return True
+
     def _on_delete(self, request, response, reply):
         Result = si_msg.Result
         entity, missing = request.entity, f'no entity {shown(request.entity)}'
+        if self._too_many_pending(response):
+            return response
         # With edits pending, the body may come or go before this one's turn: decided then.
         if entity not in self._node.world.bodies.names and not self._node.owner.busy:
             response.result = result(Result.RESULT_NOT_FOUND, missing)

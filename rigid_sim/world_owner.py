@@ -92,6 +92,11 @@ class WorldOwner:
         """Whether a job runs or waits for its turn."""
         return self._running is not None or bool(self._queue)
 
+    @property
+    def pending(self):
+        """How many jobs run or wait for their turn."""
+        return len(self._queue) + (self._running is not None)
+
     def submit(self, job):
         """Queue ``job``; it begins when every job asked before it has ended."""
         self._queue.append(job)

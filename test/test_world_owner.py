@@ -370,3 +370,34 @@ def test_a_kept_body_keeps_its_topics_across_edits_and_its_wrench_follows_it(rig
     sim.step(10)
     np.testing.assert_allclose(sim.state('b').velocity, [0.1, 0.0, 0.0], atol=1e-12)
     np.testing.assert_allclose(sim.state('ball').velocity, [0.0, 0.0, 0.0], atol=1e-12)
+
+
+def test_edits_past_the_queue_bound_are_refused_at_once_and_the_queued_ones_run(
+        sim, monkeypatch):
+    """A flood of spawns queues at most MAX_PENDING_EDITS; the next is refused, not held.
+
+    Each queued edit holds its request and, prepared, a new scene: an unbounded queue grows
+    with what a client sends. The ones queued are all answered and spawned.
+    """
+    gate = gate_spawn(monkeypatch)
+    monkeypatch.setattr(spawning, 'MAX_PENDING_EDITS', 3)   # bodies are limited to 4
+    spawns = sim.node.sim_interfaces.spawns
+    queued = []
+    for number in range(3):
+        request = SpawnEntity.Request(resource_string=BALL.replace('ball', f'ball{number}'))
+        answers = []
+        assert spawns._on_spawn(request, SpawnEntity.Response(), answers.append) is \
+            spawning.deferred.LATER
+        queued.append(answers)
+    spin_until(sim, gate.entered.is_set, 'the first spawn is prepared')
+    refused = spawns._on_spawn(SpawnEntity.Request(resource_string=BALL),
+                               SpawnEntity.Response(), None)
+    assert refused.result.result == Result.RESULT_OPERATION_FAILED
+    assert '3 scene edits are pending' in refused.result.error_message
+    deleted = spawns._on_delete(DeleteEntity.Request(entity='box'), DeleteEntity.Response(),
+                                None)
+    assert deleted.result.result == Result.RESULT_OPERATION_FAILED
+    gate.open()
+    finish(sim)
+    assert [answers[0].result.result for answers in queued] == [Result.RESULT_OK] * 3
+    assert sim.node.world.bodies.names == ('box', 'ball0', 'ball1', 'ball2')
