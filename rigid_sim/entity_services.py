@@ -181,6 +181,13 @@ class EntityServices:
         except KeyError as error:
             response.result = result(Result.RESULT_NOT_FOUND, error.args[0])
             return response
+        accel = state.acceleration
+        if any(conversions.vector_array(part).any() for part in (accel.linear, accel.angular)):
+            # An acceleration follows from the forces; a set one would be dropped silently.
+            response.result = result(Result.RESULT_FEATURE_UNSUPPORTED,
+                                     'acceleration: set by the forces, not settable; '
+                                     'leave it zero')
+            return response
         origin, orientation = conversions.pose_arrays(state.pose)
         twist = (conversions.vector_array(state.twist.linear),
                  conversions.vector_array(state.twist.angular))

@@ -221,6 +221,24 @@ def test_set_entity_state_in_the_world_and_in_another_entitys_frame(stopped):
     assert unknown.result == Result.RESULT_NOT_FOUND
 
 
+def test_set_entity_state_refuses_an_acceleration_and_changes_nothing(stopped):
+    """An acceleration follows from the forces: a non-zero or non-finite one is refused.
+
+    Accepting it would drop it silently; the body stays where it was set before.
+    """
+    sim = stopped
+    assert set_state(sim, 'box', (0.0, 0.0, 3.0), HALF_TURN_Z, (1.0, 0.0, 0.0),
+                     (0.0, 0.0, 2.0)).result == OK
+    for value in (1.0, float('nan'), float('inf')):
+        request = SetEntityState.Request(entity='box')
+        request.state.pose.orientation.w = 1.0
+        request.state.acceleration.angular.y = value
+        answer = sim.call('set_entity_state', entity='box', state=request.state).result
+        assert answer.result == Result.RESULT_FEATURE_UNSUPPORTED
+        assert 'acceleration' in answer.error_message
+        np.testing.assert_allclose(state_of(sim, 'box')[0], [0.0, 0.0, 3.0], atol=1e-12)
+
+
 def test_entities_by_name_filter_and_their_states(stopped):
     sim = stopped
     assert sim.call('get_entities').entities == ['box', 'plate']
