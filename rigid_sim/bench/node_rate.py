@@ -408,7 +408,10 @@ def main(args):
     seconds = (chosen['warmup'] if args.warmup is None else args.warmup,
                chosen['duration'] if args.duration is None else args.duration)
     results, starts = [], []
+    domain = os.environ.get('ROS_DOMAIN_ID')
     with ros_environment() as log_dir:
+        if domain:   # the caller's own domain, if it chose one
+            os.environ['ROS_DOMAIN_ID'] = domain
         if not args.control_only:
             results = run_configurations(chosen['configs'], args.integrators, log_dir, seconds)
             starts = run_starts(chosen['start_sizes'], log_dir)
