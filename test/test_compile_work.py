@@ -56,7 +56,7 @@ def wrapped(dispatcher):
     return [bool(compiled.library.get_pointer_to_function(
         compiled.fndesc.llvm_cpython_wrapper_name)) for compiled in dispatcher.overloads.values()]
 
-scene = load_scene(find_scene(sys.argv[1]))
+scene = load_scene(find_scene(sys.argv[1], ['/']))   # the test is the operator
 world = build_world(scene, 'exact_split')
 imus = scene_imus(scene, world) if sys.argv[2] == 'imus' else None
 report = {}
