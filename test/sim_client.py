@@ -18,6 +18,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from simulation_interfaces import srv
+from simulation_interfaces.msg import Result, SimulationState
 from simulation_interfaces.action import SimulateSteps
 
 import processes
@@ -100,3 +101,16 @@ class SimProcess:
             rclpy.try_shutdown(context=self.context)
         assert status == 0, output
         return output
+
+
+def stop_simulation(sim):
+    """Stop ``sim`` (a SimProcess): the scene as loaded, paused, at time 0; return it.
+
+    Already stopped, bodies may have been spawned since: then the scene is reset too.
+    """
+    state = SimulationState(state=SimulationState.STATE_STOPPED)
+    answer = sim.call('set_simulation_state', state=state).result.result
+    assert answer in (Result.RESULT_OK, srv.SetSimulationState.Response.ALREADY_IN_TARGET_STATE)
+    if answer != Result.RESULT_OK:
+        assert sim.call('reset_simulation').result.result == Result.RESULT_OK
+    return sim

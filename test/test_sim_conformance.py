@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from simulation_interfaces.action import SimulateSteps
 from simulation_interfaces.msg import EntityFilters, Result, SimulationState
-from simulation_interfaces.srv import ResetSimulation, SetSimulationState
+from simulation_interfaces.srv import ResetSimulation
 
-from sim_client import SimProcess
+from sim_client import SimProcess, stop_simulation
 
 DT = 0.01
 # No 'x' in the long name: `(.?){56}x` must fail on it, which a backtracking matcher takes
@@ -52,9 +52,7 @@ def sim(tmp_path_factory):
 @pytest.fixture
 def stopped(sim):
     """Stop the simulation: the scene as loaded, paused, at time 0."""
-    state = SimulationState(state=SimulationState.STATE_STOPPED)
-    answer = sim.call('set_simulation_state', state=state).result.result
-    assert answer in (OK, SetSimulationState.Response.ALREADY_IN_TARGET_STATE)
+    stop_simulation(sim)
     return sim
 
 

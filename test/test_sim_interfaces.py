@@ -24,7 +24,7 @@ from simulation_interfaces.srv import (
     ResetSimulation, SetEntityState, SetSimulationState, SpawnEntity)
 
 import processes
-from sim_client import EXECUTABLE, SimProcess, START_TIMEOUT
+from sim_client import EXECUTABLE, SimProcess, START_TIMEOUT, stop_simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 G = 9.81
@@ -58,11 +58,7 @@ def sim(tmp_path_factory):
 @pytest.fixture
 def stopped(sim):
     """Stop the simulation: the scene as loaded, paused, at time 0."""
-    state = SimulationState(state=SimulationState.STATE_STOPPED)
-    answer = sim.call('set_simulation_state', state=state).result.result
-    assert answer in (OK, SetSimulationState.Response.ALREADY_IN_TARGET_STATE)
-    if answer != OK:   # stopped, but bodies may have been spawned since
-        assert sim.call('reset_simulation').result.result == OK
+    stop_simulation(sim)
     assert simulation_state(sim) == SimulationState.STATE_STOPPED
     return sim
 

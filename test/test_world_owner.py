@@ -74,6 +74,15 @@ def ask_spawn(sim):
     return answers
 
 
+def spawn_past(sim, gate):
+    """Ask for the ball while ``gate`` holds another preparation, open it; assert it spawned."""
+    answers = ask_spawn(sim)
+    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+
+
 def ask_reset(sim, scope):
     answers = []
     sim.node.sim_interfaces._on_reset(ResetSimulation.Request(scope=scope),
@@ -135,11 +144,7 @@ def test_a_spawn_during_an_integrator_compile_runs_the_new_integrator_on_the_new
     monkeypatch.setattr(node_module, 'warm_up', gate.wrap(node_module.warm_up))
     assert sim.node.set_parameters([Parameter('integrator', value='rk4')])[0].successful
     assert gate.entered.wait(WAIT)          # compiling, held
-    answers = ask_spawn(sim)
-    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
-    gate.open()
-    finish(sim)
-    assert answers[0].result.result == Result.RESULT_OK
+    spawn_past(sim, gate)
     assert_runs(sim, 'rk4', ('box', 'ball'))
     sim.resume()
     assert_ball_falls(sim)
@@ -186,11 +191,7 @@ def test_a_spawn_asked_during_a_scene_reload_is_made_in_the_reloaded_scene(sim, 
     gate = gate_prepare(sim)
     assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
     assert gate.entered.wait(WAIT)          # loading, held
-    answers = ask_spawn(sim)
-    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
-    gate.open()
-    finish(sim)
-    assert answers[0].result.result == Result.RESULT_OK
+    spawn_past(sim, gate)
     assert sim.node.world.bodies.names == ('crate', 'ball')
     sim.resume()
     assert_ball_falls(sim)
@@ -208,11 +209,7 @@ def test_a_spawn_after_a_scene_set_twice_is_not_lost_to_the_second_load(sim, tmp
     assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
     assert gate.entered.wait(WAIT)          # loading, held
     assert sim.node.set_parameters([Parameter('scene', value=str(other))])[0].successful
-    answers = ask_spawn(sim)
-    spin_until(sim, lambda: answers or waits_its_turn(sim), 'spawn answered or queued')
-    gate.open()
-    finish(sim)
-    assert answers[0].result.result == Result.RESULT_OK
+    spawn_past(sim, gate)
     assert sim.node.world.bodies.names == ('crate', 'ball')
 
 
