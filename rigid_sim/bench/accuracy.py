@@ -20,6 +20,7 @@ from rigid_sim import bench
 from rigid_sim.bench.cases import CASES, CASES_BY_KEY, score
 from rigid_sim.core.integrators import REGISTRY
 from rigid_sim.core.state import ANGULAR_MOMENTUM, ORIENTATION, POSITION
+from rigid_sim.core.warm_up import warm_up
 
 TOLERANCES = tuple(10.0 ** -k for k in range(3, 12))   # adaptive error targets swept
 ERROR_LEVELS = tuple(10.0 ** -k for k in range(3, 10))  # rad, for the cost-per-accuracy table
@@ -50,6 +51,9 @@ def measure_rigid(case, setting, repeats, budget, method):
             # interval is one call whose accuracy against work is measured: a capped call
             # would give up and score as diverged. The node keeps its cap.
             world.integrator.cap = UNCAPPED
+        # Untimed: a method's first run in this process would otherwise time numba's
+        # compile or cache load (seconds), and its first setting be skipped as over budget.
+        warm_up(world)
         worlds.append((world, case.energy(world),
                        np.linalg.norm(world.y[0, ANGULAR_MOMENTUM])))
 
