@@ -98,8 +98,8 @@ def test_an_adaptive_run_is_not_cut_short_by_the_per_call_cap():
     case = CASES_BY_KEY['tumbling']
     coarse, fine = (measure_rigid(case, tolerance, 1, 60.0, 'dopri5')
                     for tolerance in (1e-3, 1e-5))
-    # An internal step costs six or seven evaluations and a rejected try; a capped call stops
-    # near seven per step. Twice that means the run went well past the cap.
+    # An internal step costs about seven evaluations (more after a rejected try): twice what
+    # the cap allows means the run went well past it.
     assert coarse.evaluations > 2 * 7 * MAX_INTERNAL_STEPS, coarse
     for result in (coarse, fine):
         assert np.isfinite([result.orientation_error, result.omega_error,
