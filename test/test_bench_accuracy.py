@@ -86,6 +86,27 @@ def test_a_run_the_world_gave_up_on_is_scored_diverged_in_every_column():
     assert all(np.isinf(error) for error in errors)
 
 
+def test_an_adaptive_run_is_not_cut_short_by_the_per_call_cap():
+    """dopri5 takes the whole tumbling interval in one call, past the node's per-call cap.
+
+    Over 20 s the body turns ~100 rad about a near-unstable axis, far more internal steps than
+    the node allows one tick: the benchmark lifts the cap for its own run, so the run is scored
+    (finite errors, none of them a give-up) and a tighter tolerance lands closer to the oracle.
+    """
+    from rigid_sim.bench.accuracy import measure_rigid
+    from rigid_sim.core.integrators.adaptive import MAX_INTERNAL_STEPS
+    case = CASES_BY_KEY['tumbling']
+    coarse, fine = (measure_rigid(case, tolerance, 1, 60.0, 'dopri5')
+                    for tolerance in (1e-3, 1e-5))
+    # An internal step costs about seven evaluations (more after a rejected try): twice what
+    # the cap allows means the run went well past it.
+    assert coarse.evaluations > 2 * 7 * MAX_INTERNAL_STEPS, coarse
+    for result in (coarse, fine):
+        assert np.isfinite([result.orientation_error, result.omega_error,
+                            result.energy_drift, result.momentum_drift]).all(), result
+    assert fine.orientation_error < coarse.orientation_error < 1.0, (coarse, fine)
+
+
 def test_mujoco_runs_the_torqued_cases_as_specified():
     """The torqued cases in MuJoCo's RK4 converge to the same oracles as our methods.
 
