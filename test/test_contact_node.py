@@ -35,3 +35,33 @@ def test_a_resting_ball_shows_its_contact_and_the_ground(rigid_sim):
     assert (abs(start.x - 0.5) < 1e-9 and abs(start.y + 0.25) < 1e-9
             and abs(start.z) <= 9.81 * 0.01 ** 2 / 2)
     assert abs(tip.x - start.x) < 1e-12 and tip.z > start.z
+
+
+BOX_URDF = """<robot name="crate"><link name="crate">
+  <inertial><mass value="2.0"/>
+    <inertia ixx="0.01333" iyy="0.01333" izz="0.01333" ixy="0" ixz="0" iyz="0"/></inertial>
+  <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
+</link></robot>"""
+
+
+def test_bodies_spawned_onto_the_ground_rest_there(rigid_sim):
+    """A URDF box and a YAML ball spawned touching z = 0 stay there, at rest, for 2 s.
+
+    Resting contact holds a body's weight with no approach speed: neither sinks (more than
+    one tick's fall, ``g dt^2 / 2``) nor bounces, and no sliding starts from rest.
+    """
+    from simulation_interfaces.msg import Result
+    from simulation_interfaces.srv import SpawnEntity
+    sim = rigid_sim(yaml=SCENE)
+    box = SpawnEntity.Request(resource_string=BOX_URDF)
+    box.initial_pose.pose.position.x, box.initial_pose.pose.position.z = -1.0, 0.1
+    ball = SpawnEntity.Request(resource_string='{name: pebble, shape: {type: sphere, '
+                               'radius: 0.05}, mass: 0.2, pose: {position: [1.0, 0.0, 0.05]}}')
+    for request in (box, ball):
+        assert sim.call(SpawnEntity, 'spawn_entity', request).result.result == Result.RESULT_OK
+    sim.step(200)
+    for name, height in (('crate', 0.1), ('pebble', 0.05)):
+        state = sim.state(name)
+        assert abs(state.position[2] - height) <= 9.81 * 0.01 ** 2 / 2, name
+        assert abs(abs(state.position[0]) - 1.0) < 1e-9 and abs(state.position[1]) < 1e-9, name
+        assert abs(state.velocity).max() < 1e-6 and abs(state.angular_velocity).max() < 1e-6
