@@ -191,7 +191,7 @@ def parse_body(value, key, budget, has_field):
     Mistake naming the entry's ``key`` path and the reason.
     """
     body = fields(value, key, BODY)
-    budget.draw_points(len(body['points']), f'{key}.points')
+    budget.draw('max_points', len(body['points']), f'{key}.points', ('points', 'named'))
     amount = {name: body[name] for name in ('mass', 'density') if name in body}
     if len(amount) != 1:
         raise Mistake(f'{key}.mass', 'give exactly one of mass (kg) or density (kg/m^3)')
@@ -201,7 +201,8 @@ def parse_body(value, key, budget, has_field):
         raise Mistake(f'{key}.goal.unknowns', 'a wrench needs wrench_input: true')
     mesh = budget.mesh(shape, f'{key}.shape') if shape['type'] == 'mesh' else None
     if inertia['method'] == 'sampling':
-        budget.draw_samples(inertia['samples'], f'{key}.inertia.samples')
+        budget.draw('max_samples', inertia['samples'], f'{key}.inertia.samples',
+                    ('samples', 'drawn'))
     try:
         properties = shape_mass_properties(shape, inertia, mesh=mesh, **amount)
     except Exception as error:  # trimesh and scipy on a user's mesh: any error refuses it

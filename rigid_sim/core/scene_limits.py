@@ -86,8 +86,8 @@ class Budget:
         self._notes = {name: f"the scene's own limits.{name}" if name in asked
                        else raise_note(name) for name in WORK_LIMITS}
         self.base_dir, self.roots = base_dir, roots
-        self.samples = self.limits['max_samples']
-        self.points = self.limits['max_points']
+        # What the scene's bodies may still take of the limits shared among them.
+        self._left = {name: self.limits[name] for name in ('max_samples', 'max_points')}
         self.mesh_bytes = self.limits['max_mesh_bytes']
         self._meshes = {}   # (absolute path, scale) -> trimesh.Trimesh
 
@@ -95,21 +95,17 @@ class Budget:
         """Words after a refusal at limit ``name``: its value and who sets it."""
         return f'above the limit of {self.limits[name]} ({self._notes[name]})'
 
-    def draw_samples(self, samples, key):
-        """Take ``samples`` from the budget, or a Mistake at ``key`` before any is drawn."""
-        if samples > self.samples:
-            drawn = self.limits['max_samples'] - self.samples
-            raise Mistake(key, f'{samples} samples, with {drawn} drawn by earlier bodies, is '
-                               f'{self.above("max_samples")}')
-        self.samples -= samples
+    def draw(self, limit, count, key, what):
+        """Take ``count`` of the shared ``limit`` for a body, or a Mistake at ``key``.
 
-    def draw_points(self, points, key):
-        """Take ``points`` named points from the budget, or a Mistake at ``key``."""
-        if points > self.points:
-            drawn = self.limits['max_points'] - self.points
-            raise Mistake(key, f'{points} points, with {drawn} named by earlier bodies, is '
-                               f'{self.above("max_points")}')
-        self.points -= points
+        ``what`` words the count and what earlier bodies did: ('samples', 'drawn').
+        """
+        left = self._left[limit]
+        if count > left:
+            noun, verb = what
+            raise Mistake(key, f'{count} {noun}, with {self.limits[limit] - left} {verb} by '
+                               f'earlier bodies, is {self.above(limit)}')
+        self._left[limit] = left - count
 
     def mesh(self, shape, key):
         """Load the mesh of a mesh ``shape``, read at most once per scene."""
