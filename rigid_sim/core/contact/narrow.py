@@ -265,18 +265,13 @@ def box_box(contacts, count, a, b, slots, margin, centre_a, r_a, half_a, centre_
     axes_b = (axis(r_b, 0), axis(r_b, 1), axis(r_b, 2))
     delta = kin.plus_scaled(centre_b, -1.0, centre_a)
     best_face, face_box, face_k = -math.inf, 0, 0
-    for k in range(3):
-        gap = _separation(axes_a[k], delta, axes_a, half_a, axes_b, half_b)
-        if gap >= margin:
-            return count
-        if gap > best_face:
-            best_face, face_box, face_k = gap, 0, k
-    for k in range(3):
-        gap = _separation(axes_b[k], delta, axes_a, half_a, axes_b, half_b)
-        if gap >= margin:
-            return count
-        if gap > best_face:
-            best_face, face_box, face_k = gap, 1, k
+    for box, faces in enumerate((axes_a, axes_b)):   # a's face axes, then b's
+        for k in range(3):
+            gap = _separation(faces[k], delta, axes_a, half_a, axes_b, half_b)
+            if gap >= margin:
+                return count
+            if gap > best_face:
+                best_face, face_box, face_k = gap, box, k
     best_edge, edge_i, edge_j, edge_axis = -math.inf, 0, 0, (0.0, 0.0, 0.0)
     for i in range(3):
         for j in range(3):
