@@ -93,6 +93,16 @@ def reference_frame(node, frame_id):
                                        names.index(frame_id))
 
 
+def entity_state(frame_id, stamp, origin, orientation, velocity, angular):
+    """Return the EntityState of a body frame: pose and twist in ``frame_id`` at ``stamp``."""
+    state = si_msg.EntityState()
+    state.header.frame_id = frame_id
+    state.header.stamp = stamp
+    conversions.fill_pose(state.pose, origin, orientation)
+    conversions.fill_twist(state.twist, velocity, angular)
+    return state
+
+
 class EntityServices:
     """GetEntities, GetEntityState, GetEntitiesStates and SetEntityState of ``node``.
 
@@ -150,12 +160,8 @@ class EntityServices:
         world = self._node.world
         origin, orientation, velocity, angular = body_state.body_frame_state(
             world.bodies, world.y, index)
-        state = si_msg.EntityState()
-        state.header.frame_id = self._node.settings.world_frame
-        state.header.stamp = conversions.to_time(world.time)
-        conversions.fill_pose(state.pose, origin, orientation)
-        conversions.fill_twist(state.twist, velocity, angular)
-        return state
+        return entity_state(self._node.settings.world_frame, conversions.to_time(world.time),
+                            origin, orientation, velocity, angular)
 
     def _on_state(self, request, response, reply):
         index = self._index(request.entity)
@@ -264,12 +270,8 @@ class EntitiesAnswer:
         states, found = self._states, self._found
         while len(states) < len(found):
             for row in self._frames[found[len(states):len(states) + self.CHUNK]].tolist():
-                state = si_msg.EntityState()
-                state.header.frame_id = self._frame_id
-                state.header.stamp = self._stamp
-                conversions.fill_pose(state.pose, row[0:3], row[3:7])
-                conversions.fill_twist(state.twist, row[7:10], row[10:13])
-                states.append(state)
+                states.append(entity_state(self._frame_id, self._stamp, row[0:3], row[3:7],
+                                           row[7:10], row[10:13]))
             if len(states) < len(found) and perf_counter() > until:
                 return False
         self._response.states = states
