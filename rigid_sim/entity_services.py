@@ -149,8 +149,9 @@ class EntityServices:
         world = self._node.world
         # The snapshot: the names and, for states, every body frame at once, now.
         frames = frame_rows(world.bodies, world.y)[:, :13] if with_states else None
+        limit = self._node.settings.max_answer_states if with_states else None
         answer = EntitiesAnswer(response, list(world.bodies.names), pattern, frames,
-                                self._node.settings.world_frame, world.time, reply)
+                                self._node.settings.world_frame, world.time, reply, limit)
         return response if answer.run(perf_counter() + SLICE) else self._builds.add(answer)
 
     def _on_entities(self, request, response, reply):
@@ -237,13 +238,16 @@ class EntitiesAnswer:
         Simulated time of the snapshot, s.
     reply : deferred.Reply
         Sends the answer when it is built over several slices.
+    limit : int or None
+        Entities the answer may carry (None: any); more matches refuse it, saying how many.
     """
 
     # Names matched or messages built between two looks at the clock.
     CHUNK = 128
 
-    def __init__(self, response, names, pattern, frames, frame_id, time, reply):
+    def __init__(self, response, names, pattern, frames, frame_id, time, reply, limit=None):
         self._response, self._names, self._pattern, self._reply = response, names, pattern, reply
+        self._limit = limit
         self._frames, self._frame_id, self._stamp = frames, frame_id, conversions.to_time(time)
         self._found = [] if pattern is not None else list(range(len(names)))
         self._looked = 0 if pattern is not None else len(names)
@@ -259,6 +263,12 @@ class EntitiesAnswer:
             self._looked = end
             if perf_counter() > until:
                 return False
+        if self._limit is not None and len(self._found) > self._limit:
+            self._response.result = result(
+                si_msg.Result.RESULT_OPERATION_FAILED,
+                f'{len(self._found)} entities match, above the {self._limit} states one answer '
+                'may carry (parameter max_answer_states): narrow the filter')
+            return True
         if self._frames is not None and not self._build_states(until):
             return False
         self._response.entities = [names[index] for index in self._found]

@@ -34,6 +34,8 @@ MIN_TOLERANCE = 1e-12
 # Each subscription and publisher slows every executor round (docs/performance.md): a
 # scene larger than this makes its per-body topics only when someone uses them.
 PER_BODY_TOPICS_LIMIT = 100
+# States of one GetEntitiesStates answer: rclpy converts 2000 in ~20 ms (docs/ros_notes.md).
+MAX_ANSWER_STATES = 2000
 MAX_PATH = 4096  # characters of a scene path, the Linux PATH_MAX
 MAX_RESOURCE_PATHS = 64  # directories in resource_paths; each is searched for a relative name
 # A frame id: name tokens joined by '/', as tf2 and RViz take them, and not too long to quote.
@@ -85,6 +87,7 @@ class Settings:
     max_mesh_faces: int    # faces of one mesh
     max_points: int        # named points of all bodies together
     goal_horizon: float    # s of simulated time to a ~/<body>/goal stamped zero or in the past
+    max_answer_states: int  # states one GetEntitiesStates answer may carry
 
     @property
     def resource_limits(self):
@@ -176,6 +179,11 @@ SPECS = {
            ('max_points', 'named points of all bodies of a scene together'))},
     'goal_horizon': Spec(float, 'seconds of simulated time from now to a ~/<body>/goal whose '
                                 'stamp is zero or not in the future', 1e-6, 1.0e4),
+    'max_answer_states': Spec(int, 'states one GetEntitiesStates answer may carry; a filter '
+                                   'matching more is refused, naming the count (rclpy turns '
+                                   'an answer into its C message in one call that holds the '
+                                   'interpreter, ~10 us a state, during which the node '
+                                   'answers nothing else)', 1, MAX_RESOURCE_LIMIT),
 }
 
 
@@ -287,7 +295,7 @@ def declare(node):
                 'world_frame': 'world', 'publish_clock': True, 'start_paused': False,
                 'step_ticks': 1, 'frame_prefix': '',
                 'per_body_topics_limit': PER_BODY_TOPICS_LIMIT, **RESOURCE_LIMITS,
-                'goal_horizon': 2.0}
+                'goal_horizon': 2.0, 'max_answer_states': MAX_ANSWER_STATES}
     for name in SPECS:
         if name == 'resource_paths':   # the operator chose the start scene's directory
             start_folder = os.path.dirname(values['scene'])

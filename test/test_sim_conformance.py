@@ -170,7 +170,7 @@ def many(tmp_path_factory):
         for i in range(MANY)]
     (folder / 'many.yaml').write_text('\n'.join(lines) + '\n')
     process = SimProcess(str(folder / 'many.yaml'), f'/mb{id(folder) % 100000}', folder,
-                         'rate:=0', 'start_paused:=true')
+                         'rate:=0', 'start_paused:=true', f'max_answer_states:={MANY}')
     yield process
     process.close()
 

@@ -190,3 +190,33 @@ def test_a_springs_goal_with_a_wall_clock_is_solved_off_the_tick(rigid_sim):
     sim.step(1)
     assert goals.solved + goals.refused == 1
     assert 'worker thread' in values(user.statuses[-1]).get('solved in', 'worker thread')
+
+
+THREE = """
+bodies:
+  - {name: a, shape: {type: sphere, radius: 0.1}, mass: 1.0, pose: {position: [1.0, 0.0, 0.0]}}
+  - {name: b, shape: {type: sphere, radius: 0.1}, mass: 1.0, pose: {position: [2.0, 0.0, 0.0]}}
+  - {name: c, shape: {type: sphere, radius: 0.1}, mass: 1.0, pose: {position: [3.0, 0.0, 0.0]}}
+"""
+
+
+def test_get_entities_states_refuses_more_states_than_one_answer_may_carry(rigid_sim):
+    """An answer of more states than max_answer_states is refused with the count, not cut."""
+    from simulation_interfaces.msg import EntityFilters, Result
+    from simulation_interfaces.srv import GetEntitiesStates
+    sim = rigid_sim(yaml=THREE, rate=0.0, start_paused=True, max_answer_states=2)
+
+    def states(pattern=''):
+        request = GetEntitiesStates.Request(filters=EntityFilters(filter=pattern))
+        return sim.call(GetEntitiesStates, 'get_entities_states', request)
+
+    refused = states()
+    assert refused.result.result == Result.RESULT_OPERATION_FAILED
+    assert '3 entities match' in refused.result.error_message
+    assert 'max_answer_states' in refused.result.error_message
+    assert list(refused.entities) == [] and list(refused.states) == []
+    two = states('^[ab]$')
+    assert two.result.result == Result.RESULT_OK
+    assert [s.pose.position.x for s in two.states] == [1.0, 2.0]
+    sim.set_parameters(max_answer_states=3)
+    assert [s.pose.position.x for s in states().states] == [1.0, 2.0, 3.0]
