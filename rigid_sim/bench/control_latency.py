@@ -4,7 +4,8 @@
 
 Part of ``rigid_sim_bench node``. The executable runs in its own process group, as a user
 starts it; a client in this process, over DDS, times parameter calls (``get_parameters``,
-one after another: p50 and p99 of the samples) and a ``~/pause`` call from sending to
+one after another, 40 at least and until a spawn or GetEntitiesStates is answered or a
+flood's 10 s are over: p50, p99 and the slowest) and a ``~/pause`` call from sending to
 answer, and then the process's exit after SIGTERM (its status and how long it took), in
 states of work: a 10 000-tick ``~/step`` of 1000 bodies, a runtime switch to an integrator
 whose kernels are not in the (fresh) cache, overload (1000 bodies at rate 1000, more than
@@ -48,9 +49,6 @@ bodies:
     twist: {linear: [0.0, 0.0, 0.0], angular: [0.0, 10000.0, 10.0]}
     wrench_input: false
 """
-# Seconds the parameter calls go on after a GetEntitiesStates is sent: its answer is built
-# and sent meanwhile.
-STATES_SECONDS = 2.0
 # A client process that asks the simulator for every entity's state, says "sent", and
 # waits for the answer.
 STATES_CALLER = f"""
@@ -192,11 +190,12 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
                 client.call(kind, name, request, READY_TIMEOUT)   # discovered, and answered
             if work == 'step':
                 client.call(SetBool, 'pause', SetBool.Request(data=True))
-            _start_work(client, work, log_dir)
-            until = time.monotonic() + {'flood': FLOOD_SECONDS,
-                                        'states': STATES_SECONDS}.get(work, 0.0)
-            asked = []
-            while len(asked) < SAMPLES or time.monotonic() < until:
+            answer = _start_work(client, work, log_dir)
+            until = time.monotonic() + (FLOOD_SECONDS if work == 'flood' else ANSWER_TIMEOUT)
+            busy = {'flood': lambda: True, 'states': lambda: client.caller.poll() is None,
+                    'spawn': lambda: not answer.done()}.get(work, lambda: False)
+            asked = []   # SAMPLES at least, and while the work lasts
+            while len(asked) < SAMPLES or (busy() and time.monotonic() < until):
                 asked.append(client.call(GetParameters, 'get_parameters',
                                          GetParameters.Request(names=['integrator']))[0])
             paused, _ = client.call(SetBool, 'pause', SetBool.Request(data=True))
