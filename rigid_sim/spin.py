@@ -33,6 +33,7 @@ def run(stopper):
         rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
         return 1
     freeze_long_lived_objects()   # no full garbage collection stalls a tick from here on
+    node.owner.keeps_heap_frozen = True   # nor one over what a scene edit builds
     executor = make_executor()
     executor.add_node(node)
     stopper.spinning = True

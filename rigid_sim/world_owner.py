@@ -15,6 +15,7 @@ now, never swapped in. :meth:`WorldOwner.swap` is the only place the node's scen
 and settings are replaced, between two ticks (docs/design.md, "One owner of the World").
 """
 from collections import deque
+import gc
 import queue
 import threading
 
@@ -23,6 +24,10 @@ from rclpy.clock import Clock, ClockType
 from rigid_sim.core.scene_edit import carry_over
 
 POLL = 0.01   # s of wall time between two looks at a running job
+# Swaps between two full collections where the heap is kept frozen: what a swap replaced is
+# freed by its reference counts, but for ~35 objects an edit in reference cycles (rclpy's
+# subscriptions and their event handlers, closures), which stay frozen until then.
+SWAPS_PER_COLLECTION = 100
 
 
 def _discard(replaced):
@@ -86,6 +91,12 @@ class WorldOwner:
         self._poll = node.create_timer(POLL, self._on_poll,
                                        clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._poll.cancel()
+        # Set by the executable, which froze what its node holds at start: a job's objects
+        # (a scene of thousands of bodies, its messages) are then built with the cyclic
+        # collector off, as each full collection walked them all under the interpreter lock
+        # (0.1-0.4 s at a spawn into 5000 bodies), and frozen once swapped in.
+        self.keeps_heap_frozen = False
+        self._frozen_swaps = 0
 
     @property
     def busy(self):
@@ -115,9 +126,13 @@ class WorldOwner:
             if work is None:
                 job.conclude(None)
                 continue
+            if self.keeps_heap_frozen:
+                gc.disable()
             job.preparation = Preparation(work)
             self._running = job
             self._poll.reset()
+        if self._running is None and self.keeps_heap_frozen:
+            gc.enable()
 
     def _on_poll(self):
         job = self._running
@@ -131,6 +146,15 @@ class WorldOwner:
         else:
             job.conclude(job.preparation)
         self._next()
+
+    def _freeze(self):
+        """Freeze what runs now, the cycles frozen garbage makes collected now and then."""
+        self._frozen_swaps += 1
+        if self._frozen_swaps >= SWAPS_PER_COLLECTION:
+            self._frozen_swaps = 0
+            gc.unfreeze()
+            gc.collect()   # one full collection's stall every SWAPS_PER_COLLECTION swaps
+        gc.freeze()
 
     def wait(self, timeout=None):
         """Block until every queued job has ended; whether they did (tests that tick)."""
@@ -173,5 +197,7 @@ class WorldOwner:
             _DISCARD.put((replaced, node.wire_scene(wiring)))
         if integrator is not None:
             node.world.integrator = integrator
+        if self.keeps_heap_frozen:
+            self._freeze()
         self.generation += 1
         node.apply(previous)   # the running light settings, onto the world that runs now

@@ -8,6 +8,7 @@ milliseconds at an unpredictable tick; ``rigid_sim_node`` freezes them before it
 node and executor, so no ROS graph is needed.
 """
 import gc
+from types import SimpleNamespace
 import signal
 import weakref
 
@@ -24,7 +25,7 @@ class _RecordingExecutor:
         self.seen = None
 
     def add_node(self, node):
-        pass
+        self.node = node
 
     def spin_once(self, timeout_sec):
         generation_2 = gc.get_objects(generation=2)
@@ -36,6 +37,9 @@ class _RecordingExecutor:
 
 
 class _StandInNode:
+    def __init__(self):
+        self.owner = SimpleNamespace(keeps_heap_frozen=False)
+
     def destroy_node(self):
         pass
 
@@ -58,6 +62,7 @@ def test_objects_alive_before_the_first_spin_are_frozen(monkeypatch):
         gc.unfreeze()
     frozen, walked = executor.seen
     assert frozen > 0 and not walked
+    assert executor.node.owner.keeps_heap_frozen   # and what its scene edits build
 
 
 def test_freezing_collects_the_garbage_first():

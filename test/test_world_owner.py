@@ -9,6 +9,7 @@ client was told; what must hold after is that what runs is what was asked for la
 nothing answered OK and then lost: the integrator steps the world it was built for, and a
 spawned body falls as a body under gravity g alone, ``g t^2 / 2`` from rest.
 """
+import gc
 import threading
 
 from geometry_msgs.msg import WrenchStamped
@@ -19,7 +20,7 @@ from simulation_interfaces.msg import Result
 from simulation_interfaces.srv import DeleteEntity, ResetSimulation, SpawnEntity
 
 import ros_tools
-from rigid_sim import conversions, node as node_module, spawning
+from rigid_sim import conversions, node as node_module, spawning, world_owner
 from rigid_sim.testing.delivery import wait_until
 
 G = 9.81
@@ -398,3 +399,58 @@ def test_edits_past_the_queue_bound_are_refused_at_once_and_the_queued_ones_run(
     finish(sim)
     assert [answers[0].result.result for answers in queued] == [Result.RESULT_OK] * 3
     assert sim.node.world.bodies.names == ('box', 'ball0', 'ball1', 'ball2')
+
+
+@pytest.fixture
+def frozen_heap(sim):
+    """Run the owner of ``sim`` as rigid_sim_node does (spin.run); put the collector back."""
+    sim.node.owner.keeps_heap_frozen = True
+    yield sim.node.owner
+    gc.enable()
+    gc.unfreeze()
+
+
+def spawn_and_delete(sim):
+    answers = ask_spawn(sim)
+    finish(sim)
+    sim.node.sim_interfaces.spawns._on_delete(DeleteEntity.Request(entity='ball'),
+                                              DeleteEntity.Response(), answers.append)
+    finish(sim)
+    assert [answer.result.result for answer in answers] == [Result.RESULT_OK] * 2
+
+
+def test_a_scene_edit_is_built_with_the_collector_off_and_frozen_once_swapped_in(
+        sim, frozen_heap, monkeypatch):
+    """A full collection walks every object not frozen, under the interpreter lock."""
+    gate = gate_spawn(monkeypatch)
+    before = gc.get_freeze_count()
+    answers = ask_spawn(sim)
+    assert gate.entered.wait(WAIT)
+    assert not gc.isenabled()   # while the worker builds the scene
+    gate.open()
+    finish(sim)
+    assert answers[0].result.result == Result.RESULT_OK
+    assert gc.isenabled()
+    assert gc.get_freeze_count() > before   # the ball's objects among them
+    sim.resume()
+    assert_ball_falls(sim)
+
+
+def test_the_garbage_frozen_scene_edits_leave_is_collected_every_so_many_swaps(
+        sim, frozen_heap, monkeypatch):
+    """Frozen garbage, the cycles among what swaps replaced, is collected now and then.
+
+    The rest is freed by reference counts; the cycles (~35 objects an edit here) stay
+    frozen until a full collection every SWAPS_PER_COLLECTION swaps.
+    """
+    def growth(cycles):
+        spawn_and_delete(sim)
+        once = gc.get_freeze_count()
+        for _ in range(cycles):
+            spawn_and_delete(sim)
+        return gc.get_freeze_count() - once
+
+    monkeypatch.setattr(world_owner, 'SWAPS_PER_COLLECTION', 10 ** 6)
+    uncollected = growth(12)
+    monkeypatch.setattr(world_owner, 'SWAPS_PER_COLLECTION', 4)   # 2 spawns and deletes
+    assert growth(12) < uncollected / 2
