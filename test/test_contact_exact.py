@@ -139,7 +139,7 @@ def test_ball_thrown_sideways_slides_through_its_impact_as_coulomb_says():
 @pytest.mark.parametrize('shape', [{'type': 'sphere', 'radius': 0.1},
                                    {'type': 'box', 'size': [0.2, 0.2, 0.2]}])
 def test_pair_meets_head_on_at_the_closed_form_time(shape):
-    """Two equal bodies closing at ``2 v`` across a gap ``d`` meet at ``d / (2 v)``, leave at ``e v``.
+    """Equal bodies closing at ``2 v`` across a gap ``d`` meet at ``d / (2 v)``, leave at ``e v``.
 
     No gravity; the step (0.03 s) does not divide the meeting time (0.4 s).
     """
