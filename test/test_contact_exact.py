@@ -183,3 +183,15 @@ def test_an_unknown_mode_is_refused_by_key():
                      'bodies': [body('b', {'type': 'sphere', 'radius': 0.1}, (0, 0, 1))]})
     assert refused.value.key == 'effects.contact.mode'
     assert "'velocity', 'exact'" in refused.value.reason
+
+
+def test_warm_up_compiles_exact_mode_and_changes_nothing():
+    """The node warms a world up before it ticks: exact mode's kernels are among those."""
+    from rigid_sim.core.warm_up import warm_up
+    world = exact_world([body('b', SHAPES['flat box'][0], (0.0, 0.0, 0.05))])
+    for _ in range(3):
+        world.step(0.01)
+    before = world.y.copy(), world.contact.work.last_lam.copy()
+    warm_up(world)
+    np.testing.assert_array_equal(world.y, before[0])
+    np.testing.assert_array_equal(world.contact.work.last_lam, before[1])
