@@ -65,8 +65,11 @@ class ExactSteps:
             if moment is None:
                 break
             here = self._here
-            self._integrate(control.integrator, start, here, time + spent, moment, span,
-                            control.diagnostics.substeps, effects)
+            try:
+                self._integrate(control.integrator, start, here, time + spent, moment, span,
+                                control.diagnostics.substeps, effects)
+            except (_Lost, ArithmeticError):
+                break   # ``into`` holds the piece's end: the velocity-level stage acts
             if not self.contact.strike(here, model):
                 break   # the gap and the contacts disagree: the velocity-level stage acts
             self.impacts += 1
