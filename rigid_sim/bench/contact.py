@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """``rigid_sim_bench contact``: contact scenes against closed forms and MuJoCo, in one run.
 
-Three scenes, each simulated by rigid_sim's contact stage and by MuJoCo (the version is
+Four scenes, each simulated by rigid_sim's contact stage and by MuJoCo (the version is
 recorded) with the same time step:
 
 - **slide at 45 degrees**: a 0.2 m cube leaves at ``v0`` at 45 degrees to the world axes
@@ -11,7 +11,14 @@ recorded) with the same time step:
 - **stack of 10 boxes** for 10 s: largest horizontal drift and largest overlap.
 - **1000 spheres poured into a box** (a floor and four walls): wall time per step (median
   of blocks of steps, ``time.perf_counter``) and the largest overlap at the end.
+- **bounce**: a ball dropped from ``h0`` with restitution ``e``; the largest relative error
+  of its first apexes against ``e^(2k) h0`` and the mean wall time per step (interleaved
+  blocks), in rigid_sim's velocity and exact contact modes. MuJoCo has no restitution
+  coefficient: its contact is made a damped spring whose half period loses the energy of
+  ``e`` (``solref`` of stiffness ``(2 pi / T)^2`` and damping ``2 zeta (2 pi / T)``, ``T``
+  MuJoCo's default time constant).
 """
+import math
 import sys
 import time
 
@@ -20,6 +27,7 @@ from scipy.spatial import cKDTree
 
 from rigid_sim import bench
 from rigid_sim.core.scene import build_world, parse_scene
+from rigid_sim.core.warm_up import warm_up
 
 try:
     import mujoco
@@ -31,6 +39,9 @@ G, MU, V0, EDGE = 9.81, 0.3, 2.0, 0.2
 SLIDE_DT, STACK_DT, POUR_DT = 1e-3, 5e-3, 5e-3
 STACK_TIME, STACK_ITERATIONS = 10.0, 200
 SPHERES, RADIUS, HALF_WIDTH = 1000, 0.05, 0.6
+BOUNCE_E, BOUNCE_H0, BOUNCE_DT, BOUNCE_APEXES = 0.8, 1.0, 1e-3, 4
+BOUNCE_RESTING_SPEED = 0.02   # m/s: below the fourth rebound's speed
+MUJOCO_TIME_CONSTANT = 0.02   # s, MuJoCo's default solref time constant
 FULL = dict(pour_steps=400, block=20)
 QUICK = dict(pour_steps=40, block=10, spheres=64, stack_time=0.5)
 GROUND = {'normal': [0.0, 0.0, 1.0], 'offset': 0.0}
@@ -157,6 +168,77 @@ def pour(count, steps, block):
             for name, end in zip(times, ends)}
 
 
+def apexes(heights, speeds):
+    """Apexes of the flights in a run's (height, vertical speed) samples.
+
+    Each is read at the last sample before the speed turned downward, above the ground (so
+    in free flight, also for MuJoCo's soft contact), by projectile motion:
+    ``height + speed^2 / (2 g)``.
+    """
+    found, last = [], (0.0, 0.0)
+    for height, speed in zip(heights, speeds):
+        if last[1] > 0.0 >= speed and last[0] > 0.0:
+            found.append(last[0] + last[1] * last[1] / (2 * G))
+        last = (height, speed)
+    return found
+
+
+def apex_error(found):
+    """Largest relative error of the first BOUNCE_APEXES apexes against ``e^(2k) h0``."""
+    errors = [a / (BOUNCE_E ** (2 * k) * BOUNCE_H0) - 1.0
+              for k, a in enumerate(found[:BOUNCE_APEXES], start=1)]
+    if len(errors) < BOUNCE_APEXES:
+        return math.nan   # fewer rebounds than asked for
+    return max(errors, key=abs)
+
+
+def mujoco_bounce_model():
+    """MJCF of the dropped ball, its contact a damped spring of restitution BOUNCE_E."""
+    log_e = math.log(BOUNCE_E)
+    zeta = -log_e / math.sqrt(math.pi ** 2 + log_e ** 2)   # e = exp(-pi zeta / sqrt(1-zeta^2))
+    omega = 2 * math.pi / MUJOCO_TIME_CONSTANT
+    xml = (f'<mujoco><option timestep="{BOUNCE_DT}" gravity="0 0 {-G}"/><worldbody>'
+           '<geom type="plane" size="0 0 1"/>'
+           f'<body pos="0 0 {RADIUS + BOUNCE_H0}"><freejoint/>'
+           f'<geom type="sphere" size="{RADIUS}" mass="1" '
+           f'solref="{-omega * omega} {-2 * zeta * omega}"/></body></worldbody></mujoco>')
+    model = mujoco.MjModel.from_xml_string(xml)
+    return model, mujoco.MjData(model)
+
+
+def bounce(block):
+    """Apex error and mean ms per step of the drop: rigid_sim's two modes and MuJoCo."""
+    t0 = math.sqrt(2 * BOUNCE_H0 / G)
+    # Past the flight that ends in impact BOUNCE_APEXES + 1: t0 (1 + 2e + ... + 2e^k).
+    duration = t0 * (1 + 2 * sum(BOUNCE_E ** k for k in range(1, BOUNCE_APEXES + 1)))
+    steps = block * math.ceil(duration / BOUNCE_DT / block)
+    ball = {'name': 'ball', 'shape': {'type': 'sphere', 'radius': RADIUS}, 'mass': 1.0,
+            'pose': {'position': [0.0, 0.0, RADIUS + BOUNCE_H0]}}
+    runs = {}
+    for mode in ('velocity', 'exact'):
+        world = rigid_world([ball], [GROUND], restitution=BOUNCE_E, mode=mode,
+                            resting_speed=BOUNCE_RESTING_SPEED)
+        warm_up(world)   # the kernels' loading is not a step's time
+        runs[f'rigid_sim, mode {mode}'] = (lambda w=world: w.step(BOUNCE_DT),
+                                           lambda w=world: (w.y[0, 2] - RADIUS, w.y[0, 9]))
+    model, data = mujoco_bounce_model()
+    runs[f'MuJoCo {mujoco.__version__}'] = (lambda: mujoco.mj_step(model, data),
+                                            lambda: (data.qpos[2] - RADIUS, data.qvel[2]))
+    samples = {name: [] for name in runs}
+    seconds = dict.fromkeys(runs, 0.0)
+    for _ in range(steps // block):   # interleaved blocks: all see the same load
+        for name, (advance, read) in runs.items():
+            clock = time.perf_counter()
+            for _ in range(block):
+                advance()
+                samples[name].append(read())
+            seconds[name] += time.perf_counter() - clock
+    # The reads are inside the timed blocks of every simulator alike: a few percent of a
+    # step, the same cost in each.
+    return {name: (apex_error(apexes(*zip(*samples[name]))), 1e3 * seconds[name] / steps)
+            for name in runs}
+
+
 def add_arguments(parser):
     """Options of ``rigid_sim_bench contact``."""
     parser.add_argument('--quick', action='store_true', help='small scenes, for tests')
@@ -171,14 +253,15 @@ def main(args):
     chosen = QUICK if args.quick else FULL
     count = chosen.get('spheres', SPHERES)
     results = {'slide': slide(), 'stack': stack(chosen.get('stack_time', STACK_TIME)),
-               'pour': pour(count, chosen['pour_steps'], chosen['block'])}
+               'pour': pour(count, chosen['pour_steps'], chosen['block']),
+               'bounce': bounce(chosen['block'])}
     print(results, file=sys.stderr)
     load = open('/proc/loadavg').read().split()[:3] if sys.platform == 'linux' else ['?']
     text = '\n'.join([
         '### Setup', *[line for line in bench.machine_description([f'MuJoCo {mujoco.__version__}'])
                        if not line.startswith('- CPU time')],
         '- Time: `time.perf_counter` around the steps (wall time; the pour: median of '
-        'interleaved blocks)',
+        'interleaved blocks; the bounce: mean of interleaved blocks)',
         f'- Load average at the end (1, 5, 15 min): {" ".join(load)}',
         f'- Command: `{bench.command_line()}`',
         f'- rigid_sim: default integrator, contact iterations 30 (stack: '
@@ -196,7 +279,13 @@ def main(args):
         f'{chosen["pour_steps"]} steps)',
         bench.markdown_table(['simulator', 'ms per step (median)', 'overlap at the end'],
                              [[name, f'{ms:.3g}', f'{1e3 * o:.3g} mm']
-                              for name, (ms, o) in results['pour'].items()])])
+                              for name, (ms, o) in results['pour'].items()]),
+        '', f'### Bounce (e {BOUNCE_E}, h0 {BOUNCE_H0:g} m, dt {BOUNCE_DT:g} s, resting speed '
+        f'{BOUNCE_RESTING_SPEED:g} m/s)',
+        bench.markdown_table(['simulator', f'largest apex error, first {BOUNCE_APEXES}',
+                              'ms per step (mean)'],
+                             [[name, f'{error:+.2e}', f'{ms:.3g}']
+                              for name, (error, ms) in results['bounce'].items()])])
     print(text)
     if args.out is not None:
         bench.write_section(args.out, SECTION, text)

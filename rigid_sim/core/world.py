@@ -193,8 +193,13 @@ class World:
         inputs = self.inputs
         if inputs.next_expiry <= self.time + EXPIRY_SLACK:
             inputs.expire(self.time)
-        stepped = self.control.step(self._y, self._spare, self.time, dt,
-                                    self.effect_parameters(), inputs.version)
+        if self.contact is None or self.contact.exact is None:
+            stepped = self.control.step(self._y, self._spare, self.time, dt,
+                                        self.effect_parameters(), inputs.version)
+        else:   # exact mode: impacts are struck within the step, where they happen
+            stepped = self.contact.exact.step(self.control, self.bodies.model, self._y,
+                                              self._spare, self.time, dt,
+                                              self.effect_parameters(), inputs.version)
         if stepped is None:
             return False
         # Contact changes the state the step ended at: the controller must not continue

@@ -13,15 +13,19 @@ One module per concern: :mod:`~rigid_sim.core.contact.broad` (sort and sweep),
 :mod:`~rigid_sim.core.contact.narrow` (the primitive pairs),
 :mod:`~rigid_sim.core.contact.solver` (the impulses), :mod:`~rigid_sim.core.contact.stage`
 (the compiled call that runs them), :mod:`~rigid_sim.core.contact.shapes` (each body's
-collision shape from the scene).
+collision shape from the scene). In exact mode (``mode: exact``)
+:mod:`~rigid_sim.core.contact.exact` strikes impacts at the moment they happen, with the
+compiled parts of :mod:`~rigid_sim.core.contact.impact`.
 """
 import numpy as np
 
+from rigid_sim.core.contact.exact import ExactSteps
+from rigid_sim.core.contact.impact import least_gap, strike, struck_pairs
 from rigid_sim.core.contact.narrow import Contacts
 from rigid_sim.core.contact.shapes import shape_arrays
 from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step, ROW
 from rigid_sim.core.scene_fields import (
-    count, list_of, Mistake, non_negative, number, REQUIRED, table, vector)
+    choice, count, list_of, Mistake, non_negative, number, REQUIRED, table, vector)
 from rigid_sim.core.dispatch import CompiledCall
 
 # A plane's normal shorter than this has no direction to normalise.
@@ -32,6 +36,10 @@ MAX_ITERATIONS = 1000
 # Features closer than this are contacts, m: bodies that touch exactly stay touching when a
 # step moves them together (a stack), and an impact is found at most this early.
 MARGIN = 1e-5
+# Features closer than this are struck together at an impact (exact mode), m: the root
+# finder leaves the struck pair about 1e-14 m from touching, and a feature a margin away
+# must meet its own impact later, not be struck early.
+IMPACT_MARGIN = 1e-9
 # Room for this many body-body contacts per body at first; more is made when a step needs it.
 PAIR_ROOM = 8
 
@@ -72,6 +80,8 @@ SETTINGS = {
     'resting_speed': (non_negative, 0.2),
     'compliance': (non_negative, 0.0),   # m/N; 0: rigid
     'iterations': (_iterations, 30),     # Gauss-Seidel sweeps per step
+    # velocity: impacts resolved where a step ends; exact: where they happen (root finding).
+    'mode': (choice('velocity', 'exact'), 'velocity'),
 }
 
 
@@ -86,7 +96,7 @@ class Contact:
         Each body's collision shape in its body frame, as :mod:`.shapes` checks them.
     planes : (P, 4) float
         Unit normal and offset of each ground plane, world.
-    friction, restitution, resting_speed, compliance, iterations
+    friction, restitution, resting_speed, compliance, iterations, mode
         As :data:`SETTINGS` says.
     """
 
@@ -94,14 +104,22 @@ class Contact:
     scene_fields = table(SETTINGS)
 
     def __init__(self, bodies, collision, planes, friction=0.5, restitution=0.0,
-                 resting_speed=0.2, compliance=0.0, iterations=30):
+                 resting_speed=0.2, compliance=0.0, iterations=30, mode='velocity'):
         kind, size = shape_arrays(collision)
         self.parameters = ContactParameters(
             np.ascontiguousarray(planes, dtype=float).reshape(-1, 4), kind, size,
             np.ascontiguousarray(-bodies.com_in_body, dtype=float), float(friction),
             float(restitution), float(resting_speed), float(compliance), int(iterations),
-            MARGIN)
+            MARGIN, mode == 'exact')
         n = bodies.count
+        # Exact mode: the steps that strike impacts where they happen; None: velocity mode.
+        self.exact = None
+        if mode == 'exact':
+            self.exact = ExactSteps(self, n)
+            self._impact_parameters = self.parameters._replace(margin=IMPACT_MARGIN)
+            self._struck = CompiledCall(struck_pairs)
+            self._strike = CompiledCall(strike)
+            self._gap = CompiledCall(least_gap)
         self._bodies = n
         self.work = self._room(n * (8 * len(self.parameters.planes) + PAIR_ROOM), n * PAIR_ROOM)
         self.count = 0   # contacts of the last step
@@ -122,7 +140,8 @@ class Contact:
             body=np.empty((contacts, 2), dtype=np.int64), lam=np.empty((contacts, 3)),
             push=np.empty((contacts, 1)), none=np.empty((0, 9)),
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
-            last_count=np.zeros(1, dtype=np.int64))
+            last_count=np.zeros(1, dtype=np.int64),
+            struck=np.empty((contacts, 2), dtype=np.int64))
         if last is not None:
             kept = last.last_count[0]
             work.last_key[:kept] = last.last_key[:kept]
@@ -141,12 +160,39 @@ class Contact:
         """
         while True:
             found, pairs = self._call(y, model, self.parameters, h, self.work)
-            room = self.work.order.shape[0]
-            if found <= room and pairs <= self.work.pairs.shape[0]:
+            if not self._grown(found, pairs):
                 self.count = found
                 return found
-            self.work = self._room(max(room, 2 * found), max(self.work.pairs.shape[0],
-                                                             2 * pairs), self.work)
+
+    def _grown(self, found, pairs):
+        """Grow the scratch if ``found`` contacts or ``pairs`` pairs did not fit; whether."""
+        room, pair_room = self.work.order.shape[0], self.work.pairs.shape[0]
+        if found <= room and pairs <= pair_room:
+            return False
+        self.work = self._room(max(room, 2 * found), max(pair_room, 2 * pairs), self.work)
+        return True
+
+    def struck(self, start, end, model):
+        """Count the pairs struck by a step between two states (exact mode).
+
+        The step went from ``start`` to ``end``; the pairs are listed in ``work.struck``;
+        :func:`~rigid_sim.core.contact.impact.struck_pairs` says which pairs are struck.
+        """
+        while True:
+            found, pairs, struck = self._struck(start, end, model, self.parameters, self.work)
+            if not self._grown(found, pairs):
+                return struck
+
+    def least_gap(self, y, struck):
+        """Return the least gap at ``y`` of the first ``struck`` pairs of ``work.struck``, m."""
+        return self._gap(y, self.parameters, self.work.struck, struck)
+
+    def strike(self, y, model):
+        """Strike the impacts of ``y`` in place (exact mode); how many contacts there were."""
+        while True:
+            found, pairs = self._strike(y, model, self._impact_parameters, self.work)
+            if not self._grown(found, pairs):
+                return found
 
     def probe(self, y, h, model):
         """Compile (or load) the stage by one call on a copy of ``y``; nothing is changed.
@@ -156,7 +202,12 @@ class Contact:
         kept, count = self.work, self.count
         self.work = self._room(kept.order.shape[0], kept.pairs.shape[0], kept)
         try:
-            self.resolve(np.array(y, dtype=float), h, model)
+            probe = np.array(y, dtype=float)
+            if self.exact is not None:
+                self.struck(probe, probe, model)
+                self.least_gap(probe, 0)
+                self.strike(probe, model)
+            self.resolve(probe, h, model)
         finally:
             self.work, self.count = kept, count
 

@@ -297,3 +297,27 @@ def box_box(contacts, count, a, b, slots, margin, centre_a, r_a, half_a, centre_
     incident = 1 - face_box
     return _face_patch(contacts, count, a, b, slots, margin, face_box, incident, centres,
                        axes, halves, face_k, 3 * face_box + face_k, face_box == 0)
+
+
+@helper
+def box_box_gap(centre_a, r_a, half_a, centre_b, r_b, half_b):
+    """Largest gap of two boxes' projections over the 15 axes, m (negative: overlap).
+
+    Positive exactly when an axis separates them and zero when they touch, so it
+    brackets the moment two boxes meet as their distance would (exact mode's root).
+    """
+    axes_a = (axis(r_a, 0), axis(r_a, 1), axis(r_a, 2))
+    axes_b = (axis(r_b, 0), axis(r_b, 1), axis(r_b, 2))
+    delta = kin.plus_scaled(centre_b, -1.0, centre_a)
+    gap = -math.inf
+    for k in range(3):
+        gap = max(gap, _separation(axes_a[k], delta, axes_a, half_a, axes_b, half_b))
+        gap = max(gap, _separation(axes_b[k], delta, axes_a, half_a, axes_b, half_b))
+    for i in range(3):
+        for j in range(3):
+            c = kin.cross(axes_a[i], axes_b[j])
+            length = math.sqrt(kin.dot(c, c))
+            if length >= PARALLEL:
+                gap = max(gap, _separation(kin.scaled(1.0 / length, c), delta, axes_a, half_a,
+                                           axes_b, half_b))
+    return gap

@@ -42,6 +42,7 @@ class ContactParameters(NamedTuple):
     compliance: float      # m/N: 0 rigid
     iterations: int        # Gauss-Seidel sweeps, for the impulses and for the positions
     margin: float          # m: features closer than this are contacts
+    exact: bool            # impacts are struck where they happen (mode: exact), not here
 
 
 class ContactWork(NamedTuple):
@@ -68,6 +69,7 @@ class ContactWork(NamedTuple):
     last_key: np.ndarray   # (C,) int: the last step's keys, sorted
     last_lam: np.ndarray   # (C, 3) and their impulses
     last_count: np.ndarray  # (1,) int
+    struck: np.ndarray     # (C, 2) int: pairs struck within a step (mode: exact)
 
 
 @helper
@@ -164,42 +166,63 @@ def _warm_start(work, key):
 
 
 @helper
+def contact_row(y, model, parameters, work, s, c, softness):
+    """Contact ``c``'s constants into row ``s``: arms, normal, tangents, masses.
+
+    ``softness`` is the compliance over the step squared (0 at an instant). Returns the
+    contact's approach speed (negative: closing), m/s.
+    """
+    contacts, rows, inertia = work.contacts, work.rows, work.inertia
+    a, b = contacts.body[c, 0], contacts.body[c, 1]
+    work.body[s, 0], work.body[s, 1] = a, b
+    point, n = kin.vector(contacts.point, c, 0), kin.vector(contacts.normal, c, 0)
+    arm_a = kin.plus_scaled(point, -1.0, kin.vector(y, a, 0))
+    arm_b = kin.plus_scaled(point, -1.0, kin.vector(y, b, 0)) if b >= 0 else arm_a
+    t1, t2 = tangents(n)
+    for k, v in enumerate((arm_a, arm_b, n, t1, t2)):
+        kin.store(rows, s, 3 * k, v)
+    m = model.inverse_mass
+    k11 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t1)
+    k12 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t2)
+    k22 = coupling(m, inertia, a, b, arm_a, arm_b, t2, t2)
+    # The largest eigenvalue of the 2x2 tangential mobility (friction_row says why).
+    big = 0.5 * (k11 + k22) + math.sqrt(0.25 * (k11 - k22) ** 2 + k12 * k12)
+    rows[s, 15] = 1.0 / big
+    kn = coupling(m, inertia, a, b, arm_a, arm_b, n, n)
+    rows[s, 18] = 1.0 / (kn + softness)
+    rows[s, 22] = 1.0 / kn
+    return kin.dot(n, relative_velocity(work.velocity, a, b, arm_a, arm_b))
+
+
+@helper
 def _set_up(y, model, parameters, work, count, h):
     """Each contact's row of constants, in key order, and its warm-started impulse."""
     contacts, rows, inertia = work.contacts, work.rows, work.inertia
+    m = model.inverse_mass
     for s in range(count):
         c = work.order[s]
-        a, b = contacts.body[c, 0], contacts.body[c, 1]
-        work.body[s, 0], work.body[s, 1] = a, b
-        point, n = kin.vector(contacts.point, c, 0), kin.vector(contacts.normal, c, 0)
-        arm_a = kin.plus_scaled(point, -1.0, kin.vector(y, a, 0))
-        arm_b = kin.plus_scaled(point, -1.0, kin.vector(y, b, 0)) if b >= 0 else arm_a
-        t1, t2 = tangents(n)
-        for k, v in enumerate((arm_a, arm_b, n, t1, t2)):
-            kin.store(rows, s, 3 * k, v)
-        m = model.inverse_mass
-        k11 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t1)
-        k12 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t2)
-        k22 = coupling(m, inertia, a, b, arm_a, arm_b, t2, t2)
-        # The largest eigenvalue of the 2x2 tangential mobility (friction_row says why).
-        big = 0.5 * (k11 + k22) + math.sqrt(0.25 * (k11 - k22) ** 2 + k12 * k12)
-        rows[s, 15] = 1.0 / big
-        kn = coupling(m, inertia, a, b, arm_a, arm_b, n, n)
-        rows[s, 18] = 1.0 / (kn + parameters.compliance / (h * h))
-        rows[s, 22] = 1.0 / kn
-        approach = kin.dot(n, relative_velocity(work.velocity, a, b, arm_a, arm_b))
+        approach = contact_row(y, model, parameters, work, s, c,
+                               parameters.compliance / (h * h))
         distance = contacts.distance[c]
         # A gap may close within the next step, no more (a speculative contact); an approach
         # faster than the resting speed that would close it bounces now, at most the margin
-        # early.
+        # early. In exact mode such a gap is left open: the next step strikes its impact
+        # where it happens (rigid_sim.core.contact.exact).
         closing = -distance / h if distance > 0.0 else 0.0
-        bounces = approach < -parameters.resting_speed and approach < closing
-        rows[s, 19] = -parameters.restitution * approach if bounces else closing
+        fast = approach < -parameters.resting_speed
+        if parameters.exact and fast and distance > 0.0:
+            rows[s, 19] = -math.inf   # no impulse: a free flight
+        else:
+            bounces = fast and approach < closing
+            rows[s, 19] = -parameters.restitution * approach if bounces else closing
         rows[s, 20] = approach
         rows[s, 21] = distance
         last = _warm_start(work, contacts.key[c])
         for k in range(3):
             work.lam[s, k] = work.last_lam[last, k] if last >= 0 else 0.0
+        a, b = work.body[s, 0], work.body[s, 1]
+        arm_a, arm_b = kin.vector(rows, s, 0), kin.vector(rows, s, 3)
+        n, t1, t2 = kin.vector(rows, s, 6), kin.vector(rows, s, 9), kin.vector(rows, s, 12)
         apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b,
               kin.scaled(work.lam[s, 0], n), False)
         friction = kin.add(kin.scaled(work.lam[s, 1], t1), kin.scaled(work.lam[s, 2], t2))
@@ -207,10 +230,12 @@ def _set_up(y, model, parameters, work, count, h):
 
 
 @helper
-def _solve(model, parameters, work, count, h):
-    """Gauss-Seidel sweeps of the impulses, then of the position correction."""
+def solve_impulses(model, parameters, work, count, softness):
+    """Gauss-Seidel sweeps of the normal impulses, then of normal and friction together.
+
+    ``softness`` is the compliance over the step squared (0 at an instant).
+    """
     rows, m, inertia = work.rows, model.inverse_mass, work.inertia
-    softness = parameters.compliance / (h * h)
     # Sweeps of the normal impulses alone first: friction then starts from the weights
     # the contacts carry, not from the rotations a first sweep's uneven pushes make. Each
     # solve stops at the sweep that changes no impulse by more than CONVERGED of the
@@ -233,6 +258,13 @@ def _solve(model, parameters, work, count, h):
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
+
+
+@helper
+def _solve(model, parameters, work, count, h):
+    """Gauss-Seidel sweeps of the impulses, then of the position correction."""
+    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    solve_impulses(model, parameters, work, count, parameters.compliance / (h * h))
     # The penetration is removed within the step.
     for s in range(count):
         rows[s, 23] = -rows[s, 21] / h
@@ -277,12 +309,12 @@ def _remember(work, count):
     work.last_count[0] = count
 
 
-@kernel
-def contact_step(y, model, parameters, h, work):
-    """Resolve the contacts of the state ``y`` (N, 13) a step of ``h`` s ended at, in place.
+@helper
+def detect(y, model, parameters, work):
+    """Every contact of ``y`` closer than the margin, into ``work.contacts``, unsorted.
 
-    Returns ``(contacts, pairs)``: how many of each were found. When either is above the
-    room of ``work`` nothing was changed: the caller grows ``work`` and calls again.
+    Returns ``(contacts, pairs)`` found; when either is above the room of ``work`` the
+    contacts were not all written.
     """
     slots = y.shape[0] + parameters.planes.shape[0]
     _shapes(y, model, parameters, work)
@@ -290,12 +322,28 @@ def contact_step(y, model, parameters, h, work):
     pairs = overlapping_pairs(work.low, work.high, work.active, work.pairs)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
-    count = _pair_contacts(parameters, work, pairs, count, slots)
-    if count > work.order.shape[0]:
-        return count, pairs
+    return _pair_contacts(parameters, work, pairs, count, slots), pairs
+
+
+@helper
+def sort_by_key(work, count):
+    """``work.order``: the first ``count`` contacts by key (a stable sort)."""
     order = np.argsort(work.contacts.key[:count], kind='mergesort')
     for s in range(count):
         work.order[s] = order[s]
+
+
+@kernel
+def contact_step(y, model, parameters, h, work):
+    """Resolve the contacts of the state ``y`` (N, 13) a step of ``h`` s ended at, in place.
+
+    Returns ``(contacts, pairs)``: how many of each were found. When either is above the
+    room of ``work`` nothing was changed: the caller grows ``work`` and calls again.
+    """
+    count, pairs = detect(y, model, parameters, work)
+    if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
+        return count, pairs
+    sort_by_key(work, count)
     _set_up(y, model, parameters, work, count, h)
     _solve(model, parameters, work, count, h)
     _move(y, model, work, h)
