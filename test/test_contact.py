@@ -240,8 +240,8 @@ def test_a_mesh_needs_a_collision_shape_in_a_scene_with_contact():
     # The box is centred on the body frame, off the mass centre: it tips onto a face.
     turn = Rotation.from_quat(world.y[0, 3:7])
     origin = world.y[0, :3] - turn.apply(world.bodies.com_in_body[0])
-    corners = origin + turn.apply(np.array(list(itertools.product(*[(-h, h) for h in
-                                                                   (0.1, 0.1, 0.15)]))))
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+    corners = origin + turn.apply(signs * [0.1, 0.1, 0.15])
     assert abs(corners[:, 2].min()) < 1e-6
 
 
@@ -267,7 +267,7 @@ ON_SIDE = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]
 
 
 def test_cylinder_standing_on_a_cap_rests():
-    """A cylinder on its cap collides as its shape by default; it must not creep (< 1 mm in 2 s)."""
+    """A cylinder on a cap collides as its shape by default; it must not creep (< 1 mm in 2 s)."""
     world = contact_world([body('can', CAN, (0.0, 0.0, 0.15))], friction=0.5)
     start = world.y[0, :7].copy()
     for _ in range(200):
@@ -276,7 +276,7 @@ def test_cylinder_standing_on_a_cap_rests():
     assert np.abs(world.y[0, 3:7] - start[3:7]).max() < 1e-6
 
 
-def test_cylinder_rolls_down_an_incline_at_g_sin_theta_over_1_plus_i_over_m_r_squared():
+def test_cylinder_rolls_down_an_incline_at_g_sin_theta_over_1_plus_i_over_m_r2():
     """Rolling without slipping: ``M a = M g sin(theta) - F``, ``I a / r = F r``.
 
     So ``a = g sin(theta) / (1 + I / (M r^2))``, with ``I`` the body's own inertia about its

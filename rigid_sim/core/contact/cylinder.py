@@ -52,13 +52,12 @@ def cylinder_plane(contacts, count, a, b, slots, margin, centre, r, half, radius
 
 @helper
 def _rim_contact(contacts, count, a, b, slots, margin, feature, p, normal, offset):
-    """A point of the cylinder against a plane, if within the margin."""
+    """Write the contact of the cylinder's point ``p`` with a plane, if within the margin."""
     distance = kin.dot(normal, p) - offset
     if distance >= margin:
         return count
-    return emit(contacts, count, a, b, slots, feature, kin.plus_scaled(p, -0.5 * distance,
-                                                                      normal),
-                normal, distance)
+    point = kin.plus_scaled(p, -0.5 * distance, normal)
+    return emit(contacts, count, a, b, slots, feature, point, normal, distance)
 
 
 @helper

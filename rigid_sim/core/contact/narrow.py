@@ -20,7 +20,8 @@ from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper
 
 # Features per pair the key keeps apart: a box-box patch has at most 8 points per reference
-# face (6 faces), an edge-edge contact one of 9 edge pairs; a box on a plane 8 corners.
+# face (6 faces), an edge-edge contact one of 9 edge pairs; a box on a plane 8 corners, a
+# cylinder 9 rim points per cap.
 FEATURES = 64
 # SAT prefers a face axis unless an edge axis separates by this fraction more: an edge
 # contact gives one point, a face contact a patch, and nearly parallel faces must not flip
