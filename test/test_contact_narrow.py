@@ -61,7 +61,8 @@ def found_contacts(shapes, positions, turns, planes=np.zeros((0, 4))):
 PAIRS = [('sphere', 'sphere'), ('sphere', 'box'), ('box', 'sphere'), ('box', 'box'),
          ('capsule', 'sphere'), ('sphere', 'capsule'), ('capsule', 'capsule'),
          ('capsule', 'box'), ('box', 'capsule'), ('cylinder', 'sphere'),
-         ('sphere', 'cylinder')]
+         ('sphere', 'cylinder'), ('cylinder', 'box'), ('box', 'cylinder'),
+         ('cylinder', 'capsule'), ('capsule', 'cylinder'), ('cylinder', 'cylinder')]
 
 
 @pytest.mark.parametrize('kinds', PAIRS)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigid_sim.core.contact import Contact
-from rigid_sim.core.contact.shapes import collision_shape, default_collision, unsupported_pair
+from rigid_sim.core.contact.shapes import collision_shape, default_collision
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects import REGISTRY as EFFECTS
@@ -281,8 +281,7 @@ def world_frame_clash(bodies, world_frame):
 def _contact(listed, bodies):
     """Take the contact settings out of ``listed``; None if not listed.
 
-    Every body then needs a collision shape, and every two shapes must collide: refused at
-    the first body that has none, or at the second of the first pair that cannot.
+    Every body then needs a collision shape: refused at the first that has none.
     """
     settings = listed.pop(Contact.name, None)
     if settings is not None:
@@ -291,17 +290,7 @@ def _contact(listed, bodies):
                 raise Mistake(f'bodies[{i}].collision', f'a {body.shape["type"]} body needs '
                               'a collision shape (sphere, box, capsule, cylinder or none) '
                               'when the scene lists contact: meshes do not collide yet')
-        pair = unsupported_pair([body.collision for body in bodies])
-        if pair is not None:
-            raise Mistake(f'bodies[{pair[1]}].collision', _pair_refusal(bodies, *pair))
     return settings
-
-
-def _pair_refusal(bodies, i, j):
-    """Why bodies ``i`` and ``j`` of a scene with contact are refused: their shapes."""
-    return (f'{bodies[i].name!r} ({bodies[i].collision["type"]}) and {bodies[j].name!r} '
-            f'({bodies[j].collision["type"]}) cannot collide: a cylinder collides with '
-            'planes and spheres only; give one a sphere, box or capsule collision shape')
 
 
 def _effects(listed, bodies):
@@ -397,8 +386,7 @@ def build_world(scene, integrator=DEFAULT_INTEGRATOR, tolerance=1e-6, error_cont
 def _contact_stage(scene, bodies):
     """Return the :class:`Contact` of ``scene`` on ``bodies``; None when it lists no contact.
 
-    Raises ValueError for a body without a collision shape, or two whose shapes cannot
-    collide (one spawned into the scene).
+    Raises ValueError for a body without a collision shape (one spawned into the scene).
     """
     if scene.contact is None:
         return None
@@ -407,9 +395,6 @@ def _contact_stage(scene, bodies):
             raise ValueError(f'body {body.name!r}: a {body.shape["type"]} body needs a '
                              'collision shape (sphere, box, capsule, cylinder or none) in a '
                              'scene with contact')
-    pair = unsupported_pair([body.collision for body in scene.bodies])
-    if pair is not None:
-        raise ValueError(_pair_refusal(scene.bodies, *pair))
     return Contact(bodies, [body.collision for body in scene.bodies], **scene.contact)
 
 

@@ -85,8 +85,9 @@ def cylinder_point(point, centre, r, half, radius):
     held = (reach * radial[0], reach * radial[1], z)
     delta = kin.plus_scaled(local, -1.0, held)
     distance = math.sqrt(kin.dot(delta, delta))
-    return (distance, kin.add(centre, kin.rotate(r, held)),
-            kin.rotate(r, kin.scaled(1.0 / distance, delta)))
+    # Outside by less than round-off resolves (a point on the rim): out across the side.
+    n = kin.scaled(1.0 / distance, delta) if distance > 0.0 else (radial if side < 0.0 else up)
+    return distance, kin.add(centre, kin.rotate(r, held)), kin.rotate(r, n)
 
 
 @helper

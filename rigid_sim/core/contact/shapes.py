@@ -9,9 +9,8 @@ A collision shape is centred at the body frame's origin, along its axes, as the 
 ``{type: cylinder, radius, length}`` (along body z, centred, as a body's cylinder ``shape``)
 or ``{type: none}`` (the body collides with nothing). A body without ``collision:``
 collides as its ``shape`` when that is a sphere, box or cylinder; a mesh body in a scene
-that lists contact must say its collision shape (meshes do not collide yet). A cylinder
-collides with planes and spheres only: :func:`unsupported_pair` names what a scene may not
-hold.
+that lists contact must say its collision shape (meshes do not collide yet). Every shape
+collides with every other and with the planes.
 """
 import numpy as np
 
@@ -26,8 +25,6 @@ COLLISION = {
     'cylinder': {'radius': (positive, REQUIRED), 'length': (positive, REQUIRED)},
     'none': {},
 }
-# What a cylinder collides with besides planes; the other kinds collide with each other.
-CYLINDER_PARTNERS = ('sphere',)
 
 
 def collision_shape(value, key):
@@ -45,22 +42,6 @@ def default_collision(shape):
     if shape['type'] in ('sphere', 'box', 'cylinder'):
         return {name: shape[name] for name in ('type', 'radius', 'size', 'length')
                 if name in shape}
-    return None
-
-
-def unsupported_pair(collision):
-    """Return ``(i, j)``, two bodies whose shapes do not collide yet; None if all pairs do.
-
-    ``collision`` lists each body's collision shape (a dict; None collides with nothing).
-    Every cylinder refuses the same kinds, so the first cylinder against the others decides.
-    """
-    kinds = [shape['type'] if shape else 'none' for shape in collision]
-    if 'cylinder' not in kinds:
-        return None
-    first = kinds.index('cylinder')
-    for j, kind in enumerate(kinds):
-        if j != first and kind not in CYLINDER_PARTNERS + ('none',):
-            return min(first, j), max(first, j)
     return None
 
 

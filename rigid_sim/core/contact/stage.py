@@ -16,13 +16,13 @@ import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper, kernel
-from rigid_sim.core.contact import capsule, cylinder, narrow
+from rigid_sim.core.contact import capsule, convex, cylinder, narrow
 from rigid_sim.core.contact.broad import overlapping_pairs
+from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
     apply, coupling, friction_row, normal_row, relative_velocity, tangents,
     world_inverse_inertia)
 
-SPHERE, BOX, CAPSULE, CYLINDER = 1, 2, 3, 4   # shape kinds; 0: no collision shape
 ROW = 24             # width of a contact's row of solver constants
 # A solve stops at the sweep whose largest change of an impulse is at most this fraction of
 # the largest impulse: further sweeps would change the velocities by round-off only.
@@ -145,8 +145,7 @@ def _pair(contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, 
     """One pair's narrow phase, ``kind_a <= kind_b``; ``flip``: they were swapped for it.
 
     A swapped pair writes ``b`` first and its normals point the other way, as
-    :func:`~rigid_sim.core.contact.narrow.emit` wants them from ``b`` to ``a``. Pairs the
-    scene refuses (shapes.unsupported_pair) write nothing.
+    :func:`~rigid_sim.core.contact.narrow.emit` wants them from ``b`` to ``a``.
     """
     first, second = (b, a) if flip else (a, b)
     if kind_a == SPHERE and kind_b == SPHERE:
@@ -171,10 +170,15 @@ def _pair(contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, 
         return capsule.capsule_capsule(contacts, count, first, second, slots, margin, ca,
                                        narrow.axis(ra, 2), size_a[1], size_a[0], cb, axis_b,
                                        size_b[1], size_b[0])
-    if kind_a == SPHERE and kind_b == CYLINDER:
+    if kind_a == SPHERE:
         return cylinder.cylinder_sphere(contacts, count, first, second, slots, margin, cb, rb,
                                         size_b[1], size_b[0], ca, size_a[0], not flip)
-    return count
+    # A cylinder with a box, a capsule or a cylinder: by their support mappings.
+    if flip:
+        return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
+                                  size_b, cb, rb, kind_a, size_a, ca, ra)
+    return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a, size_a,
+                              ca, ra, kind_b, size_b, cb, rb)
 
 
 @helper
