@@ -21,6 +21,8 @@ G = 9.81
 L_BLOCK = os.path.join(os.path.dirname(__file__), '..', 'config', 'meshes', 'l_block.obj')
 DOWN = [0.0, 0.0, -G]
 GROUND = {'normal': [0.0, 0.0, 1.0], 'offset': 0.0}
+CAN = {'type': 'cylinder', 'radius': 0.1, 'length': 0.3}
+PILL = {'type': 'capsule', 'radius': 0.05, 'length': 0.1}
 
 
 def contact_world(bodies, dt_free=None, **contact):
@@ -182,9 +184,12 @@ def test_stack_of_ten_boxes_stands_still():
 
 def test_repeat_runs_give_the_same_bits():
     """Contact order is by key, never by detection order: a run repeats to the last bit."""
+    pill = body('d', CAN, (-0.05, 0.1, 1.9), angular=(2.0, 0.0, 1.0))
+    pill['collision'] = PILL
     bodies = [cube('a', 0.2, (0.0, 0.0, 0.5), angular=(1.0, 2.0, 0.5)),
               ball('b', 0.1, (0.05, 0.02, 0.9), linear=(0.1, 0.0, 0.0)),
-              cube('c', 0.3, (0.1, -0.05, 1.4), angular=(0.0, 1.0, 3.0))]
+              cube('c', 0.3, (0.1, -0.05, 1.4), angular=(0.0, 1.0, 3.0)), pill,
+              body('e', CAN, (0.0, 0.05, 2.4), angular=(0.5, 1.5, 0.0))]
     runs = []
     for _ in range(2):
         world = contact_world(bodies, restitution=0.3)
@@ -245,7 +250,6 @@ def test_a_mesh_needs_a_collision_shape_in_a_scene_with_contact():
     assert abs(corners[:, 2].min()) < 1e-6
 
 
-CAN = {'type': 'cylinder', 'radius': 0.1, 'length': 0.3}
 # Body z along world y: a cylinder or capsule lying on its side, its axis across the x slope.
 ON_SIDE = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]
 
@@ -295,9 +299,6 @@ def test_capsule_lying_on_its_side_stays():
         world.step(0.01)
     assert np.abs(world.y[0, :7] - start).max() < 1e-6
     assert world.contact.count == 2
-
-
-PILL = {'type': 'capsule', 'radius': 0.05, 'length': 0.1}
 
 
 @pytest.mark.parametrize('bodies', [
