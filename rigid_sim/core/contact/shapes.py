@@ -14,7 +14,7 @@ collides with every other and with the planes.
 """
 import numpy as np
 
-from rigid_sim.core.contact.stage import BOX, CAPSULE, CYLINDER, SPHERE
+from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.scene_fields import (
     describe, fields, Mistake, positive, raw, REQUIRED, size)
 
