@@ -6,17 +6,23 @@ Each expected value is the textbook rigid-body result for Coulomb friction and N
 restitution, derived in the test's own docstring; none comes from the code. Worlds come from
 scene mappings, as a user writes them.
 """
+import itertools
 import math
+import os
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.scene import build_world, load_scene, parse_scene, SceneError
 from rigid_sim.resources import find_scene
 
 G = 9.81
+L_BLOCK = os.path.join(os.path.dirname(__file__), '..', 'config', 'meshes', 'l_block.obj')
 DOWN = [0.0, 0.0, -G]
 GROUND = {'normal': [0.0, 0.0, 1.0], 'offset': 0.0}
+CAN = {'type': 'cylinder', 'radius': 0.1, 'length': 0.3}
+PILL = {'type': 'capsule', 'radius': 0.05, 'length': 0.1}
 
 
 def contact_world(bodies, dt_free=None, **contact):
@@ -178,9 +184,12 @@ def test_stack_of_ten_boxes_stands_still():
 
 def test_repeat_runs_give_the_same_bits():
     """Contact order is by key, never by detection order: a run repeats to the last bit."""
+    pill = body('d', CAN, (-0.05, 0.1, 1.9), angular=(2.0, 0.0, 1.0))
+    pill['collision'] = PILL
     bodies = [cube('a', 0.2, (0.0, 0.0, 0.5), angular=(1.0, 2.0, 0.5)),
               ball('b', 0.1, (0.05, 0.02, 0.9), linear=(0.1, 0.0, 0.0)),
-              cube('c', 0.3, (0.1, -0.05, 1.4), angular=(0.0, 1.0, 3.0))]
+              cube('c', 0.3, (0.1, -0.05, 1.4), angular=(0.0, 1.0, 3.0)), pill,
+              body('e', CAN, (0.0, 0.05, 2.4), angular=(0.5, 1.5, 0.0))]
     runs = []
     for _ in range(2):
         world = contact_world(bodies, restitution=0.3)
@@ -222,18 +231,117 @@ def test_bad_contact_settings_are_refused_by_key(contact, key, words):
     assert refused.value.key == key and words in refused.value.reason
 
 
-def test_a_cylinder_needs_a_collision_shape_in_a_scene_with_contact():
-    cylinder = body('c', {'type': 'cylinder', 'radius': 0.1, 'length': 0.3}, (0.0, 0.0, 1.0))
+def test_a_mesh_needs_a_collision_shape_in_a_scene_with_contact():
+    mesh = body('m', {'type': 'mesh', 'file': L_BLOCK}, (0.0, 0.0, 1.0))
     with pytest.raises(SceneError) as refused:
-        parse_scene({'effects': {'contact': {}}, 'bodies': [cylinder]})
-    assert refused.value.key == 'bodies[0].collision'
-    cylinder['collision'] = {'type': 'box', 'size': [0.2, 0.2, 0.3]}
+        parse_scene({'effects': {'contact': {}}, 'bodies': [mesh]})
+    assert refused.value.key == 'bodies[0].collision' and 'mesh' in refused.value.reason
+    mesh['collision'] = {'type': 'box', 'size': [0.2, 0.2, 0.3]}
     world = build_world(parse_scene({'effects': {'gravity': {'acceleration': DOWN},
                                                  'contact': {'planes': [GROUND]}},
-                                     'bodies': [cylinder]}))
+                                     'bodies': [mesh]}))
     for _ in range(200):
         world.step(0.01)
-    assert abs(world.y[0, 2] - 0.15) < 1e-6   # rests on its collision box
+    # The box is centred on the body frame, off the mass centre: it tips onto a face.
+    turn = Rotation.from_quat(world.y[0, 3:7])
+    origin = world.y[0, :3] - turn.apply(world.bodies.com_in_body[0])
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
+    corners = origin + turn.apply(signs * [0.1, 0.1, 0.15])
+    assert abs(corners[:, 2].min()) < 1e-6
+
+
+# Body z along world y: a cylinder or capsule lying on its side, its axis across the x slope.
+ON_SIDE = [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)]
+
+
+def test_cylinder_standing_on_a_cap_rests():
+    """A cylinder on a cap collides as its shape by default; it must not creep (< 1 mm in 2 s)."""
+    world = contact_world([body('can', CAN, (0.0, 0.0, 0.15))], friction=0.5)
+    start = world.y[0, :7].copy()
+    for _ in range(200):
+        world.step(0.01)
+    assert np.abs(world.y[0, :3] - start[:3]).max() < 1e-3
+    assert np.abs(world.y[0, 3:7] - start[3:7]).max() < 1e-6
+
+
+def test_cylinder_rolls_down_an_incline_at_g_sin_theta_over_1_plus_i_over_m_r2():
+    """Rolling without slipping: ``M a = M g sin(theta) - F``, ``I a / r = F r``.
+
+    So ``a = g sin(theta) / (1 + I / (M r^2))``, with ``I`` the body's own inertia about its
+    axis (``M r^2 / 2`` for a solid cylinder: ``a = (2/3) g sin(theta)``).
+    """
+    theta, r = math.radians(20.0), CAN['radius']
+    plane, downhill = incline(theta)
+    normal = np.array(plane['normal'])
+    world = contact_world([body('can', CAN, r * normal, orientation=ON_SIDE, mass=2.0)],
+                          planes=[plane], friction=0.5)
+    inertia = world.bodies.inertia_body[0, 2, 2]
+    start = world.y[0, :3].copy()
+    steps, dt = 1000, 0.001
+    for _ in range(steps):
+        world.step(dt)
+    t = steps * dt
+    a = G * math.sin(theta) / (1.0 + inertia / (2.0 * r * r))
+    moved = world.y[0, :3] - start
+    expected = 0.5 * a * t * t
+    assert abs(moved @ downhill - expected) < 0.005 * expected
+    assert abs(moved @ normal) < 1e-6
+    assert abs(moved[1]) < 1e-6   # along its axis: no drift
+
+
+def test_capsule_lying_on_its_side_stays():
+    """A capsule on the ground rests on its two end spheres: no motion in 10 s."""
+    capsule = body('pill', CAN, (0.0, 0.0, 0.1), orientation=ON_SIDE)
+    capsule['collision'] = {'type': 'capsule', 'radius': 0.1, 'length': 0.3}
+    world = contact_world([capsule])
+    start = world.y[0, :7].copy()
+    for _ in range(1000):
+        world.step(0.01)
+    assert np.abs(world.y[0, :7] - start).max() < 1e-6
+    assert world.contact.count == 2
+
+
+@pytest.mark.parametrize('bodies', [
+    [cube('table', 0.4, (0.0, 0.0, 0.2), mass=5.0), body('can', CAN, (0.05, 0.02, 0.55))],
+    [cube('table', 0.4, (0.0, 0.0, 0.2), mass=5.0),
+     body('can', CAN, (0.0, 0.0, 0.5), orientation=ON_SIDE)],
+    [body('lower', CAN, (0.0, 0.0, 0.15)), body('upper', CAN, (0.03, 0.0, 0.45))],
+    [body('can', CAN, (0.0, 0.0, 0.15)), cube('lid', 0.1, (0.0, 0.0, 0.35))],
+    [body('can', CAN, (0.0, 0.0, 0.15)),
+     dict(body('pill', CAN, (0.0, 0.0, 0.35), orientation=ON_SIDE), collision=PILL)],
+], ids=['can on a box', 'can on its side on a box', 'can on a can', 'box on a can',
+        'capsule on a can'])
+def test_cylinder_pairs_through_support_mappings_rest(bodies):
+    """Resting on a cylinder, or a cylinder resting on a box: no motion (< 1 mm in 2 s).
+
+    These pairs go through GJK/EPA and each shape's own points (rim points, corners, end
+    spheres) against the other's distance: a flat face must rest on a patch, not rock on the
+    one deepest point.
+    """
+    world = contact_world(bodies, friction=0.6, iterations=100)
+    start = world.y[:, :7].copy()
+    for _ in range(200):
+        world.step(0.01)
+    assert np.abs(world.y[:, :7] - start).max() < 1e-3
+
+
+def test_capsule_lying_on_a_box_stays_on_two_contacts():
+    """A capsule on a box's top face: the segment clipped to the face gives two contacts.
+
+    It must rest there (no motion in 5 s), held at its two ends, not balanced on one point.
+    """
+    capsule = body('pill', CAN, (0.0, 0.0, 0.45), orientation=ON_SIDE)
+    capsule['collision'] = {'type': 'capsule', 'radius': 0.05, 'length': 0.2}
+    world = contact_world([cube('table', 0.4, (0.0, 0.0, 0.2), mass=5.0), capsule],
+                          friction=0.6)
+    start = world.y[:, :7].copy()
+    for _ in range(500):
+        world.step(0.01)
+    assert np.abs(world.y[:, :7] - start).max() < 1e-6
+    bodies, points, _, _ = world.contact.contacts()
+    on_box = points[(bodies[:, 0] == 0) & (bodies[:, 1] == 1)]
+    assert len(on_box) == 2
+    np.testing.assert_allclose(np.sort(on_box[:, 1]), [-0.1, 0.1], atol=1e-9)
 
 
 def test_the_packaged_contact_scene_does_what_its_comment_says():

@@ -288,8 +288,8 @@ def _contact(listed, bodies):
         for i, body in enumerate(bodies):
             if body.collision is None:
                 raise Mistake(f'bodies[{i}].collision', f'a {body.shape["type"]} body needs '
-                              'a collision shape (sphere, box or none) when the scene lists '
-                              'contact: only spheres and boxes collide')
+                              'a collision shape (sphere, box, capsule, cylinder or none) '
+                              'when the scene lists contact: meshes do not collide yet')
     return settings
 
 
@@ -393,7 +393,8 @@ def _contact_stage(scene, bodies):
     for body in scene.bodies:
         if body.collision is None:
             raise ValueError(f'body {body.name!r}: a {body.shape["type"]} body needs a '
-                             'collision shape (sphere, box or none) in a scene with contact')
+                             'collision shape (sphere, box, capsule, cylinder or none) in a '
+                             'scene with contact')
     return Contact(bodies, [body.collision for body in scene.bodies], **scene.contact)
 
 

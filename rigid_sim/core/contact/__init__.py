@@ -10,7 +10,8 @@ state the step ended at and changes momenta and positions by impulses. A scene w
 ``contact:`` builds no :class:`Contact`, and its worlds step as they always did.
 
 One module per concern: :mod:`~rigid_sim.core.contact.broad` (sort and sweep),
-:mod:`~rigid_sim.core.contact.narrow` (the primitive pairs),
+:mod:`~rigid_sim.core.contact.narrow` (the sphere and box pairs),
+:mod:`~rigid_sim.core.contact.capsule` and :mod:`~rigid_sim.core.contact.cylinder` (theirs),
 :mod:`~rigid_sim.core.contact.solver` (the impulses), :mod:`~rigid_sim.core.contact.stage`
 (the compiled call that runs them), :mod:`~rigid_sim.core.contact.shapes` (each body's
 collision shape from the scene). In exact mode (``mode: exact``)

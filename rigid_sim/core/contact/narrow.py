@@ -19,8 +19,10 @@ import numpy as np
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper
 
+SPHERE, BOX, CAPSULE, CYLINDER = 1, 2, 3, 4   # shape kinds; 0: no collision shape
 # Features per pair the key keeps apart: a box-box patch has at most 8 points per reference
-# face (6 faces), an edge-edge contact one of 9 edge pairs; a box on a plane 8 corners.
+# face (6 faces), an edge-edge contact one of 9 edge pairs; a box on a plane 8 corners, a
+# cylinder 9 rim points per cap; a support-mapping pair 1 + 30 + 18 (convex.py).
 FEATURES = 64
 # SAT prefers a face axis unless an edge axis separates by this fraction more: an edge
 # contact gives one point, a face contact a patch, and nearly parallel faces must not flip
@@ -113,10 +115,12 @@ def sphere_box_contact(centre, radius, box_centre, r, half):
     clamped = (min(max(local[0], -half[0]), half[0]), min(max(local[1], -half[1]), half[1]),
                min(max(local[2], -half[2]), half[2]))
     if clamped != local:
-        closest = kin.add(box_centre, kin.rotate(r, clamped))
-        delta = kin.plus_scaled(centre, -1.0, closest)
+        # In the box's axes: a centre outside by less than round-off of the world positions
+        # still has a direction there.
+        delta = kin.plus_scaled(local, -1.0, clamped)
         length = math.sqrt(kin.dot(delta, delta))
-        return length - radius, closest, kin.scaled(1.0 / length, delta)
+        return (length - radius, kin.add(box_centre, kin.rotate(r, clamped)),
+                kin.rotate(r, kin.scaled(1.0 / length, delta)))
     depth, face = half[0] - abs(local[0]), 0
     for k in (1, 2):
         if half[k] - abs(local[k]) < depth:

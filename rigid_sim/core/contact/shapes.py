@@ -3,20 +3,26 @@
 """Collision shapes: a body's ``collision:`` entry, or its own shape where it is a primitive.
 
 A collision shape is centred at the body frame's origin, along its axes, as the body's
-``shape`` is: ``{type: sphere, radius}``, ``{type: box, size}`` (edge lengths, m) or
-``{type: none}`` (the body collides with nothing). A body without ``collision:`` collides
-as its ``shape`` when that is a sphere or a box; a cylinder or mesh body in a scene that
-lists contact must say its collision shape (those shapes do not collide yet).
+``shape`` is: ``{type: sphere, radius}``, ``{type: box, size}`` (edge lengths, m),
+``{type: capsule, radius, length}`` (a segment of ``length`` along body z, centred, swept by
+``radius``: ``length + 2 radius`` end to end, as SDFormat and FCL measure it),
+``{type: cylinder, radius, length}`` (along body z, centred, as a body's cylinder ``shape``)
+or ``{type: none}`` (the body collides with nothing). A body without ``collision:``
+collides as its ``shape`` when that is a sphere, box or cylinder; a mesh body in a scene
+that lists contact must say its collision shape (meshes do not collide yet). Every shape
+collides with every other and with the planes.
 """
 import numpy as np
 
-from rigid_sim.core.contact.stage import BOX, SPHERE
+from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.scene_fields import (
     describe, fields, Mistake, positive, raw, REQUIRED, size)
 
 COLLISION = {
     'sphere': {'radius': (positive, REQUIRED)},
     'box': {'size': (size, REQUIRED)},
+    'capsule': {'radius': (positive, REQUIRED), 'length': (positive, REQUIRED)},
+    'cylinder': {'radius': (positive, REQUIRED), 'length': (positive, REQUIRED)},
     'none': {},
 }
 
@@ -33,13 +39,17 @@ def collision_shape(value, key):
 
 def default_collision(shape):
     """Return the collision shape of a body whose ``shape`` is ``shape``; None: none by default."""
-    if shape['type'] in ('sphere', 'box'):
-        return {name: shape[name] for name in ('type', 'radius', 'size') if name in shape}
+    if shape['type'] in ('sphere', 'box', 'cylinder'):
+        return {name: shape[name] for name in ('type', 'radius', 'size', 'length')
+                if name in shape}
     return None
 
 
 def shape_arrays(collision):
-    """(N,) kinds and (N, 3) sizes (radius; half extents) of the bodies' collision shapes."""
+    """(N,) kinds and (N, 3) sizes of the bodies' collision shapes.
+
+    A sphere's radius, a box's half extents, a capsule's or cylinder's radius and half length.
+    """
     kind = np.zeros(len(collision), dtype=np.int64)
     extent = np.zeros((len(collision), 3))
     for i, shape in enumerate(collision):
@@ -47,4 +57,7 @@ def shape_arrays(collision):
             kind[i], extent[i, 0] = SPHERE, shape['radius']
         elif shape['type'] == 'box':
             kind[i], extent[i] = BOX, 0.5 * np.asarray(shape['size'], dtype=float)
+        elif shape['type'] in ('capsule', 'cylinder'):
+            kind[i] = CAPSULE if shape['type'] == 'capsule' else CYLINDER
+            extent[i, :2] = shape['radius'], 0.5 * shape['length']
     return kind, extent

@@ -16,13 +16,13 @@ import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper, kernel
-from rigid_sim.core.contact import narrow
+from rigid_sim.core.contact import capsule, convex, cylinder, narrow
 from rigid_sim.core.contact.broad import overlapping_pairs
+from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
     apply, coupling, friction_row, normal_row, relative_velocity, tangents,
     world_inverse_inertia)
 
-SPHERE, BOX = 1, 2   # shape kinds; 0: no collision shape
 ROW = 24             # width of a contact's row of solver constants
 # A solve stops at the sweep whose largest change of an impulse is at most this fraction of
 # the largest impulse: further sweeps would change the velocities by round-off only.
@@ -33,8 +33,9 @@ class ContactParameters(NamedTuple):
     """What the compiled stage reads: the scene's contact settings and the bodies' shapes."""
 
     planes: np.ndarray     # (P, 4): unit normal (world) and offset (m): n . x = offset
-    kind: np.ndarray       # (N,) int: 0 none, SPHERE, BOX
-    size: np.ndarray       # (N, 3) m: a sphere's radius in column 0; a box's half extents
+    kind: np.ndarray       # (N,) int: 0 none, SPHERE, BOX, CAPSULE, CYLINDER
+    size: np.ndarray       # (N, 3) m: a sphere's radius in column 0; a box's half extents;
+    # a capsule's or cylinder's radius and half length (along body z)
     offset: np.ndarray     # (N, 3) m, shape centre from the centre of mass, body axes
     friction: float        # Coulomb coefficient mu
     restitution: float     # Newton's e
@@ -95,6 +96,12 @@ def _shapes(y, model, parameters, work):
         for k in range(3):
             if kind == SPHERE:
                 reach = parameters.size[i, 0]
+            elif kind == CAPSULE:
+                reach = abs(r[3 * k + 2]) * parameters.size[i, 1] + parameters.size[i, 0]
+            elif kind == CYLINDER:   # the caps' discs reach r sqrt(1 - a_k^2) across
+                along = r[3 * k + 2]
+                reach = (abs(along) * parameters.size[i, 1]
+                         + parameters.size[i, 0] * math.sqrt(max(0.0, 1.0 - along * along)))
             else:
                 reach = (abs(r[3 * k]) * parameters.size[i, 0]
                          + abs(r[3 * k + 1]) * parameters.size[i, 1]
@@ -116,14 +123,64 @@ def _plane_contacts(parameters, work, slots):
         centre = kin.vector(work.centre, i, 0)
         for p in range(planes.shape[0]):
             normal, offset = kin.vector(planes, p, 0), planes[p, 3]
+            r, size = kin.entries(work.rotation, i), parameters.size
             if kind == SPHERE:
                 count = narrow.sphere_plane(contacts, count, i, -1 - p, slots, margin, centre,
-                                            parameters.size[i, 0], normal, offset)
+                                            size[i, 0], normal, offset)
+            elif kind == BOX:
+                count = narrow.box_plane(contacts, count, i, -1 - p, slots, margin, centre, r,
+                                         kin.vector(size, i, 0), normal, offset)
+            elif kind == CAPSULE:
+                count = capsule.capsule_plane(contacts, count, i, -1 - p, slots, margin,
+                                              centre, narrow.axis(r, 2), size[i, 1],
+                                              size[i, 0], normal, offset)
             else:
-                count = narrow.box_plane(contacts, count, i, -1 - p, slots, margin, centre,
-                                         kin.entries(work.rotation, i),
-                                         kin.vector(parameters.size, i, 0), normal, offset)
+                count = cylinder.cylinder_plane(contacts, count, i, -1 - p, slots, margin,
+                                                centre, r, size[i, 1], size[i, 0], normal,
+                                                offset)
     return count
+
+
+@helper
+def _pair(contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b, cb,
+          rb, flip):
+    """One pair's narrow phase, ``kind_a <= kind_b``; ``flip``: they were swapped for it.
+
+    A swapped pair writes ``b`` first and its normals point the other way, as
+    :func:`~rigid_sim.core.contact.narrow.emit` wants them from ``b`` to ``a``.
+    """
+    first, second = (b, a) if flip else (a, b)
+    if kind_a == SPHERE and kind_b == SPHERE:
+        return narrow.sphere_sphere(contacts, count, first, second, slots, margin, ca,
+                                    size_a[0], cb, size_b[0])
+    if kind_a == SPHERE and kind_b == BOX:
+        return narrow.sphere_box(contacts, count, first, second, slots, margin, ca, size_a[0],
+                                 cb, rb, size_b, flip)
+    if kind_a == BOX and kind_b == BOX:
+        return narrow.box_box(contacts, count, first, second, slots, margin, ca, ra, size_a,
+                              cb, rb, size_b)
+    if kind_b == CAPSULE:
+        axis_b = narrow.axis(rb, 2)
+        if kind_a == SPHERE:
+            return capsule.capsule_sphere(contacts, count, first, second, slots, margin, cb,
+                                          axis_b, size_b[1], size_b[0], ca, size_a[0],
+                                          not flip)
+        if kind_a == BOX:
+            return capsule.capsule_box(contacts, count, first, second, slots, margin, cb,
+                                       axis_b, size_b[1], size_b[0], ca, ra, size_a,
+                                       not flip)
+        return capsule.capsule_capsule(contacts, count, first, second, slots, margin, ca,
+                                       narrow.axis(ra, 2), size_a[1], size_a[0], cb, axis_b,
+                                       size_b[1], size_b[0])
+    if kind_a == SPHERE:
+        return cylinder.cylinder_sphere(contacts, count, first, second, slots, margin, cb, rb,
+                                        size_b[1], size_b[0], ca, size_a[0], not flip)
+    # A cylinder with a box, a capsule or a cylinder: by their support mappings.
+    if flip:
+        return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
+                                  size_b, cb, rb, kind_a, size_a, ca, ra)
+    return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a, size_a,
+                              ca, ra, kind_b, size_b, cb, rb)
 
 
 @helper
@@ -135,18 +192,13 @@ def _pair_contacts(parameters, work, pairs, count, slots):
         a, b = work.pairs[k, 0], work.pairs[k, 1]
         ca, cb = kin.vector(work.centre, a, 0), kin.vector(work.centre, b, 0)
         ra, rb = kin.entries(work.rotation, a), kin.entries(work.rotation, b)
-        if kind[a] == SPHERE and kind[b] == SPHERE:
-            count = narrow.sphere_sphere(contacts, count, a, b, slots, margin, ca, size[a, 0],
-                                         cb, size[b, 0])
-        elif kind[a] == SPHERE:
-            count = narrow.sphere_box(contacts, count, a, b, slots, margin, ca, size[a, 0], cb,
-                                      rb, kin.vector(size, b, 0), False)
-        elif kind[b] == SPHERE:
-            count = narrow.sphere_box(contacts, count, a, b, slots, margin, cb, size[b, 0], ca,
-                                      ra, kin.vector(size, a, 0), True)
+        sa, sb = kin.vector(size, a, 0), kin.vector(size, b, 0)
+        if kind[a] <= kind[b]:
+            count = _pair(contacts, count, a, b, slots, margin, kind[a], sa, ca, ra, kind[b],
+                          sb, cb, rb, False)
         else:
-            count = narrow.box_box(contacts, count, a, b, slots, margin, ca, ra,
-                                   kin.vector(size, a, 0), cb, rb, kin.vector(size, b, 0))
+            count = _pair(contacts, count, b, a, slots, margin, kind[b], sb, cb, rb, kind[a],
+                          sa, ca, ra, True)
     return count
 
 
