@@ -143,6 +143,9 @@ class Copies:
         """Return the row of the goal's body in each copy, (copies,) int."""
         return self.target + self.width * np.arange(self.copies)
 
+    def begin(self):
+        """A new flight: nothing is carried from the last one."""
+
     def advance(self, y, time, steps, dt, substeps):
         """Advance ``y`` in place by ``steps`` steps of ``dt``, ``substeps`` pieces each.
 
