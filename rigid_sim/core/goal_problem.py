@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.rotation import angle_between
 from rigid_sim.core.body_state import body_frame_state, with_twist
-from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, fly_world,
+from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, collides, fly_world,
                                         free_under_exact_flow, held_without_goal)
 
 # Unknowns -> how many; which parts of the residual they aim at (position, orientation).
@@ -81,6 +81,7 @@ class GoalProblem:
         self.wrench = goal.unknowns == 'wrench'
         self.y = world.y.copy()
         held = held_without_goal(world, index)
+        self.collides = collides(world, index)
         self.exact = not self.wrench and free_under_exact_flow(world, index, held)
         grid = solver.time_step or goal.at - world.time
         steps = round((goal.at - world.time) / grid)
