@@ -1,7 +1,6 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""``rigid_sim_bench contact --quick``: it runs, writes its section, slides and bounces as physics
-says."""
+"""``rigid_sim_bench contact --quick``: it runs, writes its section, slides and bounces right."""
 from rigid_sim.bench import cli
 
 

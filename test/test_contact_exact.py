@@ -139,7 +139,7 @@ def test_ball_thrown_sideways_slides_through_its_impact_as_coulomb_says():
 @pytest.mark.parametrize('shape', [{'type': 'sphere', 'radius': 0.1},
                                    {'type': 'box', 'size': [0.2, 0.2, 0.2]}])
 def test_pair_meets_head_on_at_the_closed_form_time(shape):
-    """Two equal bodies closing at ``2 v`` across a gap ``d`` meet at ``d / (2 v)``, leave at ``e v``.
+    """Equal bodies closing at ``2 v`` across a gap ``d`` meet at ``d / (2 v)``, leave at ``e v``.
 
     No gravity; the step (0.03 s) does not divide the meeting time (0.4 s).
     """
@@ -183,3 +183,15 @@ def test_an_unknown_mode_is_refused_by_key():
                      'bodies': [body('b', {'type': 'sphere', 'radius': 0.1}, (0, 0, 1))]})
     assert refused.value.key == 'effects.contact.mode'
     assert "'velocity', 'exact'" in refused.value.reason
+
+
+def test_warm_up_compiles_exact_mode_and_changes_nothing():
+    """The node warms a world up before it ticks: exact mode's kernels are among those."""
+    from rigid_sim.core.warm_up import warm_up
+    world = exact_world([body('b', SHAPES['flat box'][0], (0.0, 0.0, 0.05))])
+    for _ in range(3):
+        world.step(0.01)
+    before = world.y.copy(), world.contact.work.last_lam.copy()
+    warm_up(world)
+    np.testing.assert_array_equal(world.y, before[0])
+    np.testing.assert_array_equal(world.contact.work.last_lam, before[1])

@@ -204,15 +204,18 @@ class Contact:
         return True
 
     def struck(self, start, end, model):
-        """How many pairs a step from ``start`` to ``end`` struck (exact mode), listed in
-        ``work.struck``; :func:`~rigid_sim.core.contact.impact.struck_pairs` says which."""
+        """Count the pairs struck by a step between two states (exact mode).
+
+        The step went from ``start`` to ``end``; the pairs are listed in ``work.struck``;
+        :func:`~rigid_sim.core.contact.impact.struck_pairs` says which pairs are struck.
+        """
         while True:
             found, pairs, struck = self._struck(start, end, model, self.parameters, self.work)
             if not self._grown(found, pairs):
                 return struck
 
     def least_gap(self, y, struck):
-        """The least gap at ``y`` of the first ``struck`` pairs of ``work.struck``, m."""
+        """Return the least gap at ``y`` of the first ``struck`` pairs of ``work.struck``, m."""
         return self._gap(y, self.parameters, self.work.struck, struck)
 
     def strike(self, y, model):

@@ -85,15 +85,23 @@ class ExactSteps:
         if not struck:
             return None
         integrator, substeps = control.integrator, control.diagnostics.substeps
+        known = {}   # brentq asks for the bracket's ends again: each is integrated once
 
         def gap(moment):
-            self._integrate(integrator, start, self._trial, time, moment, span, substeps,
-                            effects)
-            return self.contact.least_gap(self._trial, struck)
+            if moment not in known:
+                self._integrate(integrator, start, self._trial, time, moment, span, substeps,
+                                effects)
+                known[moment] = self.contact.least_gap(self._trial, struck)
+            return known[moment]
 
         try:
+            # The trial of the whole piece may differ from the step the controller made by
+            # round-off (a first-same-as-last method continuing): then no bracket, and the
+            # velocity-level stage takes the impact at the step's end.
+            if not gap(span) < 0.0:
+                return None
             return brentq(gap, 0.0, span, xtol=ROOT_TOLERANCE * span)
-        except _Lost:
+        except (_Lost, ArithmeticError):   # a non-finite trial; dopri5's collapsed step
             return None
 
     @staticmethod

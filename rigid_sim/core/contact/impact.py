@@ -64,7 +64,7 @@ def pair_gap(y, parameters, a, b):
 
 @kernel
 def least_gap(y, parameters, struck, count):
-    """The least :func:`pair_gap` of the first ``count`` pairs of ``struck`` at ``y``, m."""
+    """Return the least :func:`pair_gap` of the first ``count`` pairs of ``struck`` at ``y``, m."""
     gap = math.inf
     for k in range(count):
         gap = min(gap, pair_gap(y, parameters, struck[k, 0], struck[k, 1]))
@@ -73,7 +73,7 @@ def least_gap(y, parameters, struck, count):
 
 @helper
 def _approach(y, work, c):
-    """Normal speed of detected contact ``c`` (negative: closing), m/s."""
+    """Return the normal speed of detected contact ``c`` (negative: closing), m/s."""
     contacts = work.contacts
     a, b = contacts.body[c, 0], contacts.body[c, 1]
     point = kin.vector(contacts.point, c, 0)
@@ -96,7 +96,7 @@ def _resting(y, parameters, work, count, a, b):
 
 @kernel
 def struck_pairs(start, end, model, parameters, work):
-    """The pairs a step from ``start`` to ``end`` struck, into ``work.struck``.
+    """List the pairs a step from ``start`` to ``end`` struck in ``work.struck``.
 
     A pair is struck when at ``end`` a point of it overlaps while closing faster than the
     resting speed, and at ``start`` it was apart (its :func:`pair_gap` positive) and not
