@@ -32,7 +32,7 @@ CEILING = {'normal': [0.0, 0.0, -1.0], 'offset': -1.5}   # z = 1.5 m, facing dow
 
 
 def ball_world(mode='exact', integrator='exact_split', planes=(GROUND,)):
-    """A ball of radius 0.1 m at START over the ground, at rest, under gravity; no friction."""
+    """Return a world: a ball (r 0.1 m) at START over the ground, at rest; gravity, no friction."""
     scene = {'effects': {'gravity': {'acceleration': [0.0, 0.0, -G]},
                          'contact': {'mode': mode, 'planes': list(planes),
                                      'restitution': E, 'friction': 0.0,
@@ -74,7 +74,7 @@ def flight(position, velocity, duration):
 
 
 def _ballistic(duration):
-    """The flow's Jacobian over ``duration``: d(p, v)(t) / d(p, v)(0) = [[I, t I], [0, I]]."""
+    """Return the flow's Jacobian over ``duration``: d(p, v)(t) / d(p, v)(0)."""
     phi = np.eye(6)
     phi[:3, 3:] = duration * np.eye(3)
     return phi

@@ -56,7 +56,7 @@ class CopiesContact:
         return sum(self._struck)
 
     def least_gap(self, y, struck):
-        """The least gap at ``y`` of the pairs each copy's last :meth:`struck` listed, m."""
+        """Return the least gap at ``y`` of the pairs each copy's last :meth:`struck` listed, m."""
         return min(stage.least_gap(block, count) for stage, block, count
                    in zip(self.stages, self._blocks(y), self._struck) if count)
 
@@ -66,12 +66,12 @@ class CopiesContact:
                    for stage, block in zip(self.stages, self._blocks(y)))
 
     def resolve(self, y, h, model):
-        """The velocity-level stage of every copy at the end ``y`` of a step of ``h`` s."""
+        """Run the velocity-level stage of every copy at the end ``y`` of a step of ``h`` s."""
         return sum(stage.resolve(block, h, self.model)
                    for stage, block in zip(self.stages, self._blocks(y)))
 
     def forget(self):
-        """A new flight: no copy's warm start is from another flight."""
+        """Drop every copy's warm start: a new flight starts from none."""
         for stage in self.stages:
             stage.forget()
 
@@ -122,7 +122,7 @@ class ContactSteps:
         self._spare = None
 
     def begin(self):
-        """A new flight: no copy's warm start is from another flight."""
+        """Start a new flight: no copy's warm start is from another flight."""
         self.contact.forget()
 
     def advance(self, y, time, steps, dt, substeps):

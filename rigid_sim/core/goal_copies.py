@@ -144,7 +144,7 @@ class Copies:
         return self.target + self.width * np.arange(self.copies)
 
     def begin(self):
-        """A new flight: nothing is carried from the last one."""
+        """Start a new flight: nothing is carried from the last one."""
 
     def advance(self, y, time, steps, dt, substeps):
         """Advance ``y`` in place by ``steps`` steps of ``dt``, ``substeps`` pieces each.
