@@ -180,7 +180,8 @@ def test_a_ball_s_goal_through_a_bounce_is_reached_at_the_stamped_time(rigid_sim
     user.goal(at=1.0, position=LOW, orientation=np.array([0.0, 0.0, 0.0, 1.0]))
     sim.step(1)
     while sim.node.goals.solved == 0:
-        assert sim.time < 0.3, 'the worker thread did not answer'
+        # The ball falls meanwhile (and may bounce): the re-anchored solve starts there.
+        assert sim.time < 0.6, 'the worker thread did not answer'
         time.sleep(0.005)
         sim.step(1)
     assert values(user.statuses[-1])['solved in'].startswith('worker' if thread else 'tick')
