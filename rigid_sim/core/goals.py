@@ -190,8 +190,8 @@ def _unreached(goal, problem, newton, errors):
         aimed = [error for error, aims in zip(errors, problem.aims) if aims]
         if np.abs(np.linalg.norm(planned, axis=1) - aimed).max() > ACCEPTED:
             return (f'the flight of the whole world ends {left}, elsewhere than the goal\'s '
-                    f'own flight, which meets only the ground planes: another body is in '
-                    f'the way')
+                    f'own flight, which meets only the ground planes: is another body in '
+                    f'the way?')
     if all(problem.aims):
         return f'no convergence: the flight ends {left}'
     aimed = 'position' if problem.aims[0] else 'orientation'
