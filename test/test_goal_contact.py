@@ -323,3 +323,22 @@ def test_a_spinning_ball_s_goal_through_a_bounce_with_friction(mu):
     assert stuck == (mu == 0.5)
     assert np.linalg.norm(position - target) < 1e-6
     assert (Rotation.from_quat(orientation) * turn.inv()).magnitude() < 1e-6
+
+
+def test_a_copy_that_fails_leaves_the_others_impacts_alone():
+    """A copy thrown at 1e300 m/s overflows; the others bounce as the closed form says.
+
+    The root finder integrates every row at once: a failed row must not make it give up
+    on the impacts of the rows beside it.
+    """
+    world = ball_world()
+    rollout = Rollout(world, 0, 3)
+    rollout.prepare(Flight(world, 130, DT, world.inputs), world.y)
+    velocities = np.array([[1.0, -0.5, 2.0], [1e300, 1e300, -1e300], [0.5, 0.0, 1.0]])
+    rows = np.repeat(world.y[:1], 3, axis=0)
+    rows[:, 7:10] = MASS * velocities
+    final, _ = rollout.fly(rows)
+    assert np.isnan(final[1]).all()
+    for k in (0, 2):
+        position, _, impacts = flight(START, velocities[k], 1.3)
+        assert impacts and np.abs(final[k, :3] - position).max() < 1e-9

@@ -120,22 +120,45 @@ class ContactSteps:
         self.exact = ExactSteps(self.contact, copies.width * copies.copies)
         self.control = FixedSteps(copies.integrator)
         self._spare = None
+        self._parking = None
 
-    def begin(self):
-        """Start a new flight: no copy's warm start is from another flight."""
+    def begin(self, parking):
+        """Start a new flight: no copy's warm start is from another flight.
+
+        ``parking`` (R, 13): the group's rows as the world has them, where a copy that
+        failed waits (:meth:`advance`).
+        """
         self.contact.forget()
+        self._parking = parking
 
     def advance(self, y, time, steps, dt, substeps):
-        """Advance ``y`` in place by ``steps`` steps of ``dt``, ``substeps`` pieces each."""
+        """Advance ``y`` in place by ``steps`` steps of ``dt``, ``substeps`` pieces each.
+
+        A copy whose rows failed (NaN) is parked at the group's start while the others
+        fly on, and is NaN again at the end: the root finder integrates every row at once
+        and gives up on a state with a failed row, which would lose the others' impacts.
+        """
         if self._spare is None or self._spare.shape != y.shape:
             self._spare = np.empty_like(y)
         self.control.diagnostics.substeps = substeps
         effects = self.copies.effect_parameters()
         state, spare = y, self._spare
+        failed = np.zeros(y.shape[0], dtype=bool)
         for k in range(steps):
+            failed |= self._park(state)
             stepped = self.exact.step(self.control, None, state, spare, time + k * dt, dt,
                                       effects, 0)
             self.contact.resolve(stepped, dt, None)
             state, spare = stepped, state
+        failed |= self._park(state)
         if state is not y:
             y[...] = state
+        y[failed] = np.nan
+
+    def _park(self, y):
+        """Rows (N,) bool of the copies in ``y`` that failed, set to the group's start."""
+        width = self.contact.width
+        bad = np.repeat((~np.isfinite(y).all(axis=1)).reshape(-1, width).any(axis=1), width)
+        if bad.any():
+            y[bad] = np.tile(self._parking, (int(bad.sum()) // width, 1))
+        return bad

@@ -186,7 +186,7 @@ class Rollout:
         """
         y = self._start.copy()
         y[self.targets] = rows
-        self.stepper.begin()
+        self.stepper.begin(self._start[:self.copies.width])
         t0, dt = self._flight.t0, self._flight.dt
         path = [(t0, y[self.targets].copy())] if every else []
         for first, steps, substeps, inputs, sums, base in self._segments:
