@@ -195,3 +195,22 @@ def test_warm_up_compiles_exact_mode_and_changes_nothing():
     warm_up(world)
     np.testing.assert_array_equal(world.y, before[0])
     np.testing.assert_array_equal(world.contact.work.last_lam, before[1])
+
+
+def test_ball_onto_a_box_resting_on_the_ground_bounces_as_off_the_ground():
+    """The box rests: the ball's apexes above its top are ``e^(2k) h0``, within the sink.
+
+    Within a step the integrator lets the resting box sink under gravity until the
+    velocity-level stage lifts it back at the step's end, at most ``g dt^2 / 2``: each
+    impact can come that much lower, so the k-th apex is within ``k g dt^2 / 2``. The box
+    is stopped before the impact is solved, so the ball leaves at ``e`` times its own speed.
+    """
+    h0, dt, top = 0.5, 1e-3, 0.2
+    world = exact_world([body('ball', {'type': 'sphere', 'radius': 0.05},
+                              (0.0, 0.0, top + 0.05 + h0)),
+                         body('box', {'type': 'box', 'size': [0.4, 0.4, top]},
+                              (0.0, 0.0, top / 2))], restitution=E, resting_speed=0.02)
+    _, apexes, _ = bounce(world, top + 0.05, dt, 2.5)
+    for k, apex in enumerate(apexes[:5], start=1):
+        assert abs(apex - E ** (2 * k) * h0) < k * G * dt * dt / 2
+    np.testing.assert_allclose(world.y[1, :3], [0.0, 0.0, top / 2], atol=1e-9)

@@ -261,7 +261,7 @@ def main(args):
         '### Setup', *[line for line in bench.machine_description([f'MuJoCo {mujoco.__version__}'])
                        if not line.startswith('- CPU time')],
         '- Time: `time.perf_counter` around the steps (wall time; the pour: median of '
-        'interleaved blocks)',
+        'interleaved blocks; the bounce: mean of interleaved blocks)',
         f'- Load average at the end (1, 5, 15 min): {" ".join(load)}',
         f'- Command: `{bench.command_line()}`',
         f'- rigid_sim: default integrator, contact iterations 30 (stack: '

@@ -152,12 +152,23 @@ def strike(y, model, parameters, work):
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
     sort_by_key(work, count)
+    # First the resting contacts alone: they held their bodies through the piece the
+    # impact ends, and the step controller's integration let those sink under gravity,
+    # so they stop them now (the velocity-level stage would at the step's end). Then an
+    # impact meets a body at rest, as it was: a ball onto a box on the ground leaves at
+    # e times its own speed, not e times its speed less the box's sinking.
     for s in range(count):
         approach = contact_row(y, model, parameters, work, s, work.order[s], 0.0)
-        bounces = approach < -parameters.resting_speed
-        work.rows[s, 19] = -parameters.restitution * approach if bounces else 0.0
+        work.rows[s, 19] = -math.inf if approach < -parameters.resting_speed else 0.0
         for k in range(3):
             work.lam[s, k] = 0.0
+    solve_impulses(model, parameters, work, count, 0.0)
+    for s in range(count):
+        a, b = work.body[s, 0], work.body[s, 1]
+        approach = kin.dot(kin.vector(work.rows, s, 6), relative_velocity(
+            work.velocity, a, b, kin.vector(work.rows, s, 0), kin.vector(work.rows, s, 3)))
+        bounces = approach < -parameters.resting_speed
+        work.rows[s, 19] = -parameters.restitution * approach if bounces else 0.0
     solve_impulses(model, parameters, work, count, 0.0)
     for i in range(y.shape[0]):
         touched = False
