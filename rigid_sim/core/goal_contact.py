@@ -92,12 +92,14 @@ class FixedSteps:
     def __init__(self, integrator):
         self.integrator = integrator
         self.diagnostics = _Substeps()
+        self.failed = False   # whether a step since the caller last cleared it spoiled rows
 
     def step(self, y, into, time, dt, effects, version):
         """``into`` = ``y`` advanced by ``dt``; failed rows NaN."""
         into[...] = y
         if self.integrator.advance(into, time, dt, self.diagnostics.substeps, effects):
             spoiled(into)
+            self.failed = True
         return into
 
     def state_changed(self):
@@ -143,14 +145,15 @@ class ContactSteps:
         self.control.diagnostics.substeps = substeps
         effects = self.copies.effect_parameters()
         state, spare = y, self._spare
-        failed = np.zeros(y.shape[0], dtype=bool)
+        failed = self._park(state)
         for k in range(steps):
-            failed |= self._park(state)
             stepped = self.exact.step(self.control, None, state, spare, time + k * dt, dt,
                                       effects, 0)
             self.contact.resolve(stepped, dt, None)
             state, spare = stepped, state
-        failed |= self._park(state)
+            if self.control.failed:   # only a step of the integrator makes rows NaN
+                self.control.failed = False
+                failed |= self._park(state)
         if state is not y:
             y[...] = state
         y[failed] = np.nan
