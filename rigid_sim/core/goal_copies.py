@@ -143,6 +143,12 @@ class Copies:
         """Return the row of the goal's body in each copy, (copies,) int."""
         return self.target + self.width * np.arange(self.copies)
 
+    def begin(self, parking):
+        """Start a new flight: nothing is carried from the last one; ``parking`` unused.
+
+        (A failed row is NaN from then on; the kernels step each row alone.)
+        """
+
     def advance(self, y, time, steps, dt, substeps):
         """Advance ``y`` in place by ``steps`` steps of ``dt``, ``substeps`` pieces each.
 

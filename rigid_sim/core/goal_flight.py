@@ -18,6 +18,7 @@ import numpy as np
 
 from rigid_sim.core import safeguards
 from rigid_sim.core.effects.damping import Damping
+from rigid_sim.core.goal_contact import ContactSteps
 from rigid_sim.core.goal_copies import Copies
 from rigid_sim.core.inputs import EXPIRY_SLACK, WrenchInputs
 from rigid_sim.core.integrators.splitting import EXACT_DRIFT
@@ -31,15 +32,21 @@ class GoalRefused(ValueError):
     """A goal that cannot be reached within the scene's limits; nothing was changed."""
 
 
+def collides(world, index):
+    """Whether body ``index`` has a collision shape in a scene with contact."""
+    return world.contact is not None and world.contact.parameters.kind[index] != 0
+
+
 def free_under_exact_flow(world, index, held):
     """Whether the world's integrator moves body ``index`` exactly at any step.
 
     The exact-flow splittings drift by the closed-form torque-free motion and kick with
     the wrench, which is exact when nothing torques the body and its force is constant:
-    gravity only (no spring on it, no damper, no wrench in ``held``, AppliedWrenches).
+    gravity only (no spring on it, no damper, no wrench in ``held``, AppliedWrenches),
+    and nothing it could collide with.
     """
     return (getattr(world.integrator, 'drift', None) == EXACT_DRIFT
-            and not held.held_mask[index]
+            and not held.held_mask[index] and not collides(world, index)
             and not any(effect.torqued[index] or isinstance(effect, Damping)
                         for effect in world.effects))
 
@@ -147,6 +154,13 @@ class Rollout:
 
     def __init__(self, world, index, copies, wrench_axes=None):
         self.copies = Copies(world, index, copies)
+        # How the rows are stepped: through the planes where the scene's contact is exact
+        # and the group collides (velocity mode: see GoalProblem.verified), else freely.
+        self.stepper = self.copies
+        contact = world.contact
+        if (contact is not None and contact.exact is not None
+                and contact.parameters.kind[self.copies.rows].any()):
+            self.stepper = ContactSteps(contact, self.copies)
         self.targets = self.copies.target_rows()
         self.wrench_axes = wrench_axes
         self._segments = []
@@ -172,6 +186,7 @@ class Rollout:
         """
         y = self._start.copy()
         y[self.targets] = rows
+        self.stepper.begin(self._start[:self.copies.width])
         t0, dt = self._flight.t0, self._flight.dt
         path = [(t0, y[self.targets].copy())] if every else []
         for first, steps, substeps, inputs, sums, base in self._segments:
@@ -185,7 +200,7 @@ class Rollout:
                 chunk = steps - done
                 if every:
                     chunk = min(chunk, every - (first + done) % every)
-                self.copies.advance(y, t0 + (first + done) * dt, chunk, dt, substeps)
+                self.stepper.advance(y, t0 + (first + done) * dt, chunk, dt, substeps)
                 done += chunk
                 if every:
                     path.append((t0 + (first + done) * dt, y[self.targets].copy()))
@@ -198,8 +213,9 @@ def snapshot(world, y=None, held=None):
     """Return a World that steps as ``world`` would from here, without touching it.
 
     Its own copy of the state (``y``, default the world's), time, step guard's count,
-    integrator and held wrenches (``held``, default the world's); the bodies and the
-    effects' parameters, which stepping never changes, are shared.
+    integrator, held wrenches (``held``, default the world's) and contact stage (with the
+    world's warm start); the bodies and the effects' parameters, which stepping never
+    changes, are shared.
     """
     control = world.control
     copied = World(world.bodies, world.y if y is None else y, world.effects,
@@ -208,6 +224,8 @@ def snapshot(world, y=None, held=None):
                    error_control=control.error_control)
     copied.time = world.time
     copied.diagnostics.substeps = world.diagnostics.substeps
+    if world.contact is not None:   # after the state is set, which drops the warm start
+        copied.contact = world.contact.duplicate()
     return copied
 
 
@@ -238,21 +256,25 @@ def fly_world(world, y, flight, wrench=None, axes='world', index=None, path_ever
     plan : list of (steps, substeps) runs the world's guard chose
     path : list of (time, (13,) state) of body ``index``
     capped : bool, whether a step needed more than the guard's cap of substeps
+    touched : bool, whether body ``index`` was in a contact where a step ended
     """
     copied = snapshot(world, y, flight.held)
     if wrench is not None:
         copied.inputs.hold(index, GOAL_KEY, axes, wrench[:3], wrench[3:],
                            expires=flight.arrival)
     plan, path, capped = [], [(copied.time, y[index].copy())] if path_every else [], False
+    touched = False
     for step in range(flight.steps):
         if not copied.step(flight.dt):
-            return None, plan, path, capped
+            return None, plan, path, capped, touched
         substeps = copied.diagnostics.substeps
         capped |= bool(copied.diagnostics.why) and copied.diagnostics.why.capped
+        if copied.contact is not None and copied.contact.count:
+            touched |= bool((copied.contact.contacts()[0] == index).any())
         if plan and plan[-1][1] == substeps:
             plan[-1] = (plan[-1][0] + 1, substeps)
         else:
             plan.append((1, substeps))
         if path_every and ((step + 1) % path_every == 0 or step + 1 == flight.steps):
             path.append((copied.time, copied.y[index].copy()))
-    return copied.y, plan, path, capped
+    return copied.y, plan, path, capped, touched

@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.rotation import angle_between
 from rigid_sim.core.body_state import body_frame_state, with_twist
-from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, fly_world,
+from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, collides, fly_world,
                                         free_under_exact_flow, held_without_goal)
 
 # Unknowns -> how many; which parts of the residual they aim at (position, orientation).
@@ -31,6 +31,11 @@ MAX_FLIGHT_WORK = 4_000_000   # row-substeps of one flight of every copy, at mos
 # than the fine flight to be worth solving first.
 COARSE_STEP = 0.2
 COARSE_GAIN = 4
+# Why a goal whose flight meets contact in velocity mode is refused: its copies fly free.
+VELOCITY_MODE = (
+    'the flight to the goal meets contact, and goals through contact need effects: '
+    'contact: {mode: exact}: velocity mode resolves an impact where a step ends, so the '
+    'pose at the goal\'s time jumps as the impact moves from one step to the next')
 
 
 def rotation_vector(q):
@@ -76,6 +81,7 @@ class GoalProblem:
         self.wrench = goal.unknowns == 'wrench'
         self.y = world.y.copy()
         held = held_without_goal(world, index)
+        self.collides = collides(world, index)
         self.exact = not self.wrench and free_under_exact_flow(world, index, held)
         grid = solver.time_step or goal.at - world.time
         steps = round((goal.at - world.time) / grid)
@@ -337,12 +343,14 @@ class GoalProblem:
         every = max(1, self.grid.steps // PATH_POSES) if want_path else 0
         for attempt in range(attempts):
             self._check_limits(newton.values)
-            final, plan, path, capped = fly_world(
+            final, plan, path, capped, touched = fly_world(
                 self.world, self.world_start(newton.values), self.grid,
                 newton.values if self.wrench else None, self.goal.axes, self.index, every)
             if final is None or capped:
                 raise GoalRefused('the motion needs more substeps than the step guard '
                                   'allows' if capped else 'the world gave a step up')
+            if touched and self.world.contact.exact is None:
+                raise GoalRefused(VELOCITY_MODE)
             residual = self.residual_of(final[self.index][None])[0]
             if self.close_enough(residual) or attempt + 1 == attempts:
                 break

@@ -182,9 +182,16 @@ def _check_speed(goal, linear, angular):
                           f'goal max_spin {goal.max_spin:.3g} rad/s')
 
 
-def _unreached(goal, problem, errors):
+def _unreached(goal, problem, newton, errors):
     """Why a solution that leaves ``errors`` (m, rad) at the goal is refused."""
     left = f'{errors[0]:.3g} m and {errors[1]:.3g} rad from the goal'
+    if problem.collides:   # does the goal's own flight, on the planes alone, end elsewhere?
+        planned = problem.residuals(newton.values[None])[0].reshape(-1, 3)
+        aimed = [error for error, aims in zip(errors, problem.aims) if aims]
+        if np.abs(np.linalg.norm(planned, axis=1) - aimed).max() > ACCEPTED:
+            return (f'the flight of the whole world ends {left}, elsewhere than the goal\'s '
+                    f'own flight, which meets only the ground planes: is another body in '
+                    f'the way?')
     if all(problem.aims):
         return f'no convergence: the flight ends {left}'
     aimed = 'position' if problem.aims[0] else 'orientation'
@@ -229,7 +236,7 @@ class GoalSolver:
         final, trace = problem.verified(newton, path)
         errors = problem.errors(final)
         if max(errors) > ACCEPTED:
-            raise GoalRefused(_unreached(goal, problem, errors))
+            raise GoalRefused(_unreached(goal, problem, newton, errors))
         condition = newton.condition()
         if not (np.isfinite(condition) and np.isfinite(newton.values).all()):
             raise GoalRefused('the unknowns do not move the body (singular Jacobian)')

@@ -18,6 +18,8 @@ collision shape from the scene). In exact mode (``mode: exact``)
 :mod:`~rigid_sim.core.contact.exact` strikes impacts at the moment they happen, with the
 compiled parts of :mod:`~rigid_sim.core.contact.impact`.
 """
+import copy
+
 import numpy as np
 
 from rigid_sim.core.contact.exact import ExactSteps
@@ -149,6 +151,35 @@ class Contact:
             work.last_lam[:kept] = last.last_lam[:kept]
             work.last_count[0] = kept
         return work
+
+    def restricted(self, rows):
+        """Return the stage of bodies ``rows`` (R,) alone: same planes and settings.
+
+        Its own scratch and no warm start: a goal's copies of a body
+        (:mod:`rigid_sim.core.goal_contact`) meet the planes and each other within their
+        group, never another copy or a body left out.
+        """
+        part = copy.copy(self)
+        keep = {'kind': self.parameters.kind[rows], 'size': self.parameters.size[rows],
+                'offset': self.parameters.offset[rows]}
+        part.parameters = self.parameters._replace(**{
+            name: np.ascontiguousarray(value) for name, value in keep.items()})
+        part._bodies = len(rows)
+        part.work = part._room(len(rows) * (8 * len(self.parameters.planes) + PAIR_ROOM),
+                               len(rows) * PAIR_ROOM)
+        part.count = 0
+        if self.exact is not None:
+            part.exact = ExactSteps(part, len(rows))
+            part._impact_parameters = part.parameters._replace(margin=IMPACT_MARGIN)
+        return part
+
+    def duplicate(self):
+        """Return a stage that steps as this one would from here: its own scratch and memory."""
+        twin = copy.copy(self)
+        twin.work = self._room(self.work.order.shape[0], self.work.pairs.shape[0], self.work)
+        if self.exact is not None:
+            twin.exact = ExactSteps(twin, self._bodies)
+        return twin
 
     def forget(self):
         """Drop the warm start: the next step solves from zero impulses (a reset)."""
