@@ -13,7 +13,8 @@ One module per concern: :mod:`~rigid_sim.core.contact.broad` (sort and sweep),
 :mod:`~rigid_sim.core.contact.narrow` (the sphere and box pairs),
 :mod:`~rigid_sim.core.contact.capsule` and :mod:`~rigid_sim.core.contact.cylinder` (theirs),
 :mod:`~rigid_sim.core.contact.solver` (the impulses), :mod:`~rigid_sim.core.contact.stage`
-(the compiled call that runs them), :mod:`~rigid_sim.core.contact.shapes` (each body's
+(the compiled call that runs them), :mod:`~rigid_sim.core.contact.kinds` (the set of shape
+kinds the stage is compiled for), :mod:`~rigid_sim.core.contact.shapes` (each body's
 collision shape from the scene). In exact mode (``mode: exact``)
 :mod:`~rigid_sim.core.contact.exact` strikes impacts at the moment they happen, with the
 compiled parts of :mod:`~rigid_sim.core.contact.impact`.
