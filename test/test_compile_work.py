@@ -9,7 +9,8 @@ gets compiled, never by how long it takes: the sum over a scene's effects is one
 over); helpers get no Python wrapper and one specialisation per argument type, never one per
 constant they are called with; array copies in kernels compile no string formatting; the
 net wrench and IMU readings are compiled for a scene with IMUs only, and before its first
-tick. The cold start runs in a child process with a cache directory of its own.
+tick; the contact stage compiles the narrow-phase pairs of the scene's shape kinds alone. The
+cold start runs in a child process with a cache directory of its own.
 """
 import json
 import os
@@ -179,3 +180,46 @@ def test_a_scene_with_an_imu_has_its_readings_compiled_before_its_first_reading(
     assert ('rigid_sim.core.imu_kinematics', 'readings') in names
     assert report['imu_readings'] == []
     assert not formatting_code(names)
+
+
+# The modules of the shapes beyond spheres and boxes: their pairs and the GJK/EPA path.
+SHAPE_MODULES = ('rigid_sim.core.contact.capsule', 'rigid_sim.core.contact.cylinder',
+                 'rigid_sim.core.contact.convex')
+# Spheres and boxes, then a capsule and a cylinder with them, as a spawn would bring in.
+ALL_KINDS = """
+effects:
+  gravity: {acceleration: [0.0, 0.0, -9.81]}
+  contact:
+    planes: [{normal: [0.0, 0.0, 1.0], offset: 0.0}]
+bodies:
+  - {name: ball, shape: {type: sphere, radius: 0.1}, mass: 1.0}
+  - {name: crate, shape: {type: box, size: [0.2, 0.2, 0.2]}, mass: 1.0}
+  - name: pill
+    shape: {type: sphere, radius: 0.05}
+    collision: {type: capsule, radius: 0.05, length: 0.2}
+    mass: 1.0
+  - {name: can, shape: {type: cylinder, radius: 0.05, length: 0.2}, mass: 1.0}
+"""
+
+
+def test_a_contact_scene_compiles_the_pairs_of_its_shape_kinds_alone(tmp_path):
+    """The packaged contact scene (spheres and boxes), cold: no capsule, cylinder or GJK code.
+
+    Its stage is compiled (contact_step), and so are the sphere and box pairs, but none of
+    the functions of the capsule, cylinder and convex modules. A scene that brings a capsule
+    and a cylinder in, on the same cache (a spawn's new set of kinds), then compiles their
+    plane and pair functions and the GJK/EPA path, and loads the sphere and box pairs from
+    the cache, compiling none of them again.
+    """
+    names = cold_start(tmp_path, 'contact.yaml', imus=False)['warm_up']
+    assert ('rigid_sim.core.contact.stage', 'contact_step') in names
+    assert ('rigid_sim.core.contact.narrow', 'box_box') in names
+    assert [name for name in names if name[0] in SHAPE_MODULES] == []
+    scene = tmp_path / 'all_kinds.yaml'
+    scene.write_text(ALL_KINDS)
+    names = cold_start(tmp_path, str(scene), imus=False)['warm_up']
+    assert ('rigid_sim.core.contact.stage', 'contact_step') in names
+    for module, function in (('capsule', 'capsule_plane'), ('capsule', 'capsule_capsule'),
+                             ('cylinder', 'cylinder_plane'), ('convex', 'convex_pair')):
+        assert (f'rigid_sim.core.contact.{module}', function) in names
+    assert [name for name in names if name[0] == 'rigid_sim.core.contact.narrow'] == []

@@ -13,7 +13,8 @@ One module per concern: :mod:`~rigid_sim.core.contact.broad` (sort and sweep),
 :mod:`~rigid_sim.core.contact.narrow` (the sphere and box pairs),
 :mod:`~rigid_sim.core.contact.capsule` and :mod:`~rigid_sim.core.contact.cylinder` (theirs),
 :mod:`~rigid_sim.core.contact.solver` (the impulses), :mod:`~rigid_sim.core.contact.stage`
-(the compiled call that runs them), :mod:`~rigid_sim.core.contact.shapes` (each body's
+(the compiled call that runs them), :mod:`~rigid_sim.core.contact.kinds` (the set of shape
+kinds the stage is compiled for), :mod:`~rigid_sim.core.contact.shapes` (each body's
 collision shape from the scene). In exact mode (``mode: exact``)
 :mod:`~rigid_sim.core.contact.exact` strikes impacts at the moment they happen, with the
 compiled parts of :mod:`~rigid_sim.core.contact.impact`.
@@ -24,6 +25,7 @@ import numpy as np
 
 from rigid_sim.core.contact.exact import ExactSteps
 from rigid_sim.core.contact.impact import least_gap, strike, struck_pairs
+from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import Contacts
 from rigid_sim.core.contact.shapes import shape_arrays
 from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step, ROW
@@ -113,7 +115,7 @@ class Contact:
             np.ascontiguousarray(planes, dtype=float).reshape(-1, 4), kind, size,
             np.ascontiguousarray(-bodies.com_in_body, dtype=float), float(friction),
             float(restitution), float(resting_speed), float(compliance), int(iterations),
-            MARGIN, mode == 'exact')
+            MARGIN, mode == 'exact', ShapeKinds(kind))
         n = bodies.count
         # Exact mode: the steps that strike impacts where they happen; None: velocity mode.
         self.exact = None
@@ -155,7 +157,8 @@ class Contact:
     def restricted(self, rows):
         """Return the stage of bodies ``rows`` (R,) alone: same planes and settings.
 
-        Its own scratch and no warm start: a goal's copies of a body
+        Its own scratch and no warm start, and this stage's compiled code (its set of shape
+        kinds holds theirs): a goal's copies of a body
         (:mod:`rigid_sim.core.goal_contact`) meet the planes and each other within their
         group, never another copy or a body left out.
         """

@@ -12,12 +12,14 @@ friction would have moved them in the step, then by the split-impulse correction
 import math
 from typing import NamedTuple
 
+from numba.extending import overload
 import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.contact import capsule, convex, cylinder, narrow
 from rigid_sim.core.contact.broad import overlapping_pairs
+from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
     apply, coupling, friction_row, normal_row, relative_velocity, tangents,
@@ -44,6 +46,7 @@ class ContactParameters(NamedTuple):
     iterations: int        # Gauss-Seidel sweeps, for the impulses and for the positions
     margin: float          # m: features closer than this are contacts
     exact: bool            # impacts are struck where they happen (mode: exact), not here
+    shapes: ShapeKinds     # the kinds in ``kind``: the stage is compiled for these alone
 
 
 class ContactWork(NamedTuple):
@@ -111,94 +114,118 @@ def _shapes(y, model, parameters, work):
             work.high[i, k] = centre[k] + reach
 
 
-@helper
-def _plane_contacts(parameters, work, slots):
-    """Every shape against every plane; returns the count of contacts (maybe above room)."""
-    count = 0
-    contacts, planes, margin = work.contacts, parameters.planes, parameters.margin
-    for i in range(work.centre.shape[0]):
-        kind = parameters.kind[i]
-        if kind == 0:
-            continue
-        centre = kin.vector(work.centre, i, 0)
-        for p in range(planes.shape[0]):
-            normal, offset = kin.vector(planes, p, 0), planes[p, 3]
-            r, size = kin.entries(work.rotation, i), parameters.size
-            if kind == SPHERE:
-                count = narrow.sphere_plane(contacts, count, i, -1 - p, slots, margin, centre,
-                                            size[i, 0], normal, offset)
-            elif kind == BOX:
-                count = narrow.box_plane(contacts, count, i, -1 - p, slots, margin, centre, r,
-                                         kin.vector(size, i, 0), normal, offset)
-            elif kind == CAPSULE:
-                count = capsule.capsule_plane(contacts, count, i, -1 - p, slots, margin,
-                                              centre, narrow.axis(r, 2), size[i, 1],
-                                              size[i, 0], normal, offset)
-            else:
-                count = cylinder.cylinder_plane(contacts, count, i, -1 - p, slots, margin,
-                                                centre, r, size[i, 1], size[i, 0], normal,
-                                                offset)
-    return count
+def _plane_contacts(shapes, parameters, work, slots):
+    """Every shape against every plane; returns the count of contacts (maybe above room).
+
+    Compiled for the set of kinds ``shapes`` (:mod:`.kinds`): a kind not in it is pruned.
+    """
 
 
-@helper
-def _pair(contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b, cb,
-          rb, flip):
+@overload(_plane_contacts)
+def _plane_contacts_for(shapes, parameters, work, slots):
+    # Constants of the closure: numba prunes a branch on a false one before typing its callee.
+    capsules, cylinders = CAPSULE in shapes.kinds, CYLINDER in shapes.kinds
+
+    def plane_contacts(shapes, parameters, work, slots):
+        count = 0
+        contacts, planes, margin = work.contacts, parameters.planes, parameters.margin
+        for i in range(work.centre.shape[0]):
+            kind = parameters.kind[i]
+            if kind == 0:
+                continue
+            centre = kin.vector(work.centre, i, 0)
+            for p in range(planes.shape[0]):
+                normal, offset = kin.vector(planes, p, 0), planes[p, 3]
+                r, size = kin.entries(work.rotation, i), parameters.size
+                if kind == SPHERE:
+                    count = narrow.sphere_plane(contacts, count, i, -1 - p, slots, margin,
+                                                centre, size[i, 0], normal, offset)
+                elif kind == BOX:
+                    count = narrow.box_plane(contacts, count, i, -1 - p, slots, margin, centre,
+                                             r, kin.vector(size, i, 0), normal, offset)
+                elif capsules and kind == CAPSULE:
+                    count = capsule.capsule_plane(contacts, count, i, -1 - p, slots, margin,
+                                                  centre, narrow.axis(r, 2), size[i, 1],
+                                                  size[i, 0], normal, offset)
+                elif cylinders:
+                    count = cylinder.cylinder_plane(contacts, count, i, -1 - p, slots, margin,
+                                                    centre, r, size[i, 1], size[i, 0], normal,
+                                                    offset)
+        return count
+    return plane_contacts
+
+
+def _pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
+          cb, rb, flip):
     """One pair's narrow phase, ``kind_a <= kind_b``; ``flip``: they were swapped for it.
 
     A swapped pair writes ``b`` first and its normals point the other way, as
-    :func:`~rigid_sim.core.contact.narrow.emit` wants them from ``b`` to ``a``.
+    :func:`~rigid_sim.core.contact.narrow.emit` wants them from ``b`` to ``a``. Compiled for
+    the set of kinds ``shapes`` (:mod:`.kinds`): the pairs of a kind not in it are pruned.
     """
-    first, second = (b, a) if flip else (a, b)
-    if kind_a == SPHERE and kind_b == SPHERE:
-        return narrow.sphere_sphere(contacts, count, first, second, slots, margin, ca,
-                                    size_a[0], cb, size_b[0])
-    if kind_a == SPHERE and kind_b == BOX:
-        return narrow.sphere_box(contacts, count, first, second, slots, margin, ca, size_a[0],
-                                 cb, rb, size_b, flip)
-    if kind_a == BOX and kind_b == BOX:
-        return narrow.box_box(contacts, count, first, second, slots, margin, ca, ra, size_a,
-                              cb, rb, size_b)
-    if kind_b == CAPSULE:
-        axis_b = narrow.axis(rb, 2)
+
+
+@overload(_pair)
+def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
+              size_b, cb, rb, flip):
+    # Constants of the closure: numba prunes a branch on a false one before typing its callee.
+    capsules, cylinders = CAPSULE in shapes.kinds, CYLINDER in shapes.kinds
+
+    def pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
+             size_b, cb, rb, flip):
+        first, second = (b, a) if flip else (a, b)
+        if kind_a == SPHERE and kind_b == SPHERE:
+            return narrow.sphere_sphere(contacts, count, first, second, slots, margin, ca,
+                                        size_a[0], cb, size_b[0])
+        if kind_a == SPHERE and kind_b == BOX:
+            return narrow.sphere_box(contacts, count, first, second, slots, margin, ca,
+                                     size_a[0], cb, rb, size_b, flip)
+        if kind_a == BOX and kind_b == BOX:
+            return narrow.box_box(contacts, count, first, second, slots, margin, ca, ra,
+                                  size_a, cb, rb, size_b)
+        if capsules and kind_b == CAPSULE:
+            axis_b = narrow.axis(rb, 2)
+            if kind_a == SPHERE:
+                return capsule.capsule_sphere(contacts, count, first, second, slots, margin,
+                                              cb, axis_b, size_b[1], size_b[0], ca, size_a[0],
+                                              not flip)
+            if kind_a == BOX:
+                return capsule.capsule_box(contacts, count, first, second, slots, margin, cb,
+                                           axis_b, size_b[1], size_b[0], ca, ra, size_a,
+                                           not flip)
+            return capsule.capsule_capsule(contacts, count, first, second, slots, margin, ca,
+                                           narrow.axis(ra, 2), size_a[1], size_a[0], cb,
+                                           axis_b, size_b[1], size_b[0])
+        if not cylinders:   # every pair of the kinds in the set was met above
+            return count
         if kind_a == SPHERE:
-            return capsule.capsule_sphere(contacts, count, first, second, slots, margin, cb,
-                                          axis_b, size_b[1], size_b[0], ca, size_a[0],
-                                          not flip)
-        if kind_a == BOX:
-            return capsule.capsule_box(contacts, count, first, second, slots, margin, cb,
-                                       axis_b, size_b[1], size_b[0], ca, ra, size_a,
-                                       not flip)
-        return capsule.capsule_capsule(contacts, count, first, second, slots, margin, ca,
-                                       narrow.axis(ra, 2), size_a[1], size_a[0], cb, axis_b,
-                                       size_b[1], size_b[0])
-    if kind_a == SPHERE:
-        return cylinder.cylinder_sphere(contacts, count, first, second, slots, margin, cb, rb,
-                                        size_b[1], size_b[0], ca, size_a[0], not flip)
-    # A cylinder with a box, a capsule or a cylinder: by their support mappings.
-    if flip:
-        return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
-                                  size_b, cb, rb, kind_a, size_a, ca, ra)
-    return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a, size_a,
-                              ca, ra, kind_b, size_b, cb, rb)
+            return cylinder.cylinder_sphere(contacts, count, first, second, slots, margin, cb,
+                                            rb, size_b[1], size_b[0], ca, size_a[0], not flip)
+        # A cylinder with a box, a capsule or a cylinder: by their support mappings.
+        if flip:
+            return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
+                                      size_b, cb, rb, kind_a, size_a, ca, ra)
+        return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a,
+                                  size_a, ca, ra, kind_b, size_b, cb, rb)
+    return pair
 
 
 @helper
 def _pair_contacts(parameters, work, pairs, count, slots):
     """Run the narrow phase of each of the first ``pairs`` pairs, after ``count`` contacts."""
     contacts, kind, size = work.contacts, parameters.kind, parameters.size
-    margin = parameters.margin
+    margin, shapes = parameters.margin, parameters.shapes
     for k in range(pairs):
         a, b = work.pairs[k, 0], work.pairs[k, 1]
         ca, cb = kin.vector(work.centre, a, 0), kin.vector(work.centre, b, 0)
         ra, rb = kin.entries(work.rotation, a), kin.entries(work.rotation, b)
         sa, sb = kin.vector(size, a, 0), kin.vector(size, b, 0)
         if kind[a] <= kind[b]:
-            count = _pair(contacts, count, a, b, slots, margin, kind[a], sa, ca, ra, kind[b],
-                          sb, cb, rb, False)
+            count = _pair(shapes, contacts, count, a, b, slots, margin, kind[a], sa, ca, ra,
+                          kind[b], sb, cb, rb, False)
         else:
-            count = _pair(contacts, count, b, a, slots, margin, kind[b], sb, cb, rb, kind[a],
-                          sa, ca, ra, True)
+            count = _pair(shapes, contacts, count, b, a, slots, margin, kind[b], sb, cb, rb,
+                          kind[a], sa, ca, ra, True)
     return count
 
 
@@ -370,7 +397,7 @@ def detect(y, model, parameters, work):
     """
     slots = y.shape[0] + parameters.planes.shape[0]
     _shapes(y, model, parameters, work)
-    count = _plane_contacts(parameters, work, slots)
+    count = _plane_contacts(parameters.shapes, parameters, work, slots)
     pairs = overlapping_pairs(work.low, work.high, work.active, work.pairs)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
