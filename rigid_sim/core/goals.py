@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_sim.core import goal_arclength
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
@@ -65,11 +64,10 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
                       + int(np.log2(CONTINUATION_STAGE / SMALLEST_STAGE)) + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# pseudo-arclength continuation and its polish, the other starts (:func:`_starts`) and
-# the branches of whole turns. The node decides by it whether a goal is solved in the tick.
-WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 4)
-                      + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
-                 + goal_arclength.WORST_FLIGHTS)
+# other starts (:func:`_starts`) and the branches of whole turns. The node decides by it
+# whether a goal is solved in the tick.
+WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
+                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
 
 
 @dataclass(frozen=True)
@@ -250,8 +248,7 @@ class GoalSolver:
 
         The first solutions come from the continuation of the current motion
         (:meth:`_continued`, twist and angular unknowns) and from the corrected current
-        motion, the nearer taken; if neither converges, from the pseudo-arclength
-        continuation (:meth:`_followed`), then the other starts (:func:`_starts`).
+        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges).
         Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
@@ -264,11 +261,6 @@ class GoalSolver:
                 continue
             try:
                 found.append(solve(problem))
-            except NoConvergence:
-                pass
-        if not found:   # folds stopped the continuation: follow the curve through them
-            try:
-                found.append(self._followed(problem))
             except NoConvergence:
                 pass
         if not found:
@@ -332,17 +324,6 @@ class GoalSolver:
         finally:
             problem.aim_at(*problem.goal_pose)
         return newton
-
-    def _followed(self, problem):
-        """Newton from where the pseudo-arclength continuation crosses the goal.
-
-        On the coarse flight where there is one (:mod:`~rigid_sim.core.goal_arclength`):
-        the curve is long over a long flight, and its end starts Newton there, then on
-        the fine flight.
-        """
-        problem.fly_on(problem.coarse or problem.fine)
-        values = goal_arclength.Arclength(problem).follow()
-        return self._converged(problem, [(values, None)])
 
     @staticmethod
     def _converged(problem, starts, bound=None, iterations=MAX_ITERATIONS):
