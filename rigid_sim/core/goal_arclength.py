@@ -70,7 +70,7 @@ class Arclength:
 
     @staticmethod
     def _tangent(jacobian, before):
-        """Unit null vector of ``jacobian`` (m, n + 1), on the side of ``before``."""
+        """Return the unit null vector of ``jacobian`` (m, n + 1) on the side of ``before``."""
         tangent = np.linalg.svd(jacobian)[2][-1]
         return tangent if tangent @ before >= 0.0 else -tangent
 
