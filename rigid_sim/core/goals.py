@@ -9,7 +9,9 @@ goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them fro
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
 forward differences of copies of the body flown together in one compiled call. Of the
 solutions it finds (by continuation from the current motion, from the current motion
-corrected by the least move that closes its gap, and on the branches a whole turn away) it
+corrected by the least move that closes its gap, where both fail by pseudo-arclength
+continuation through folds (:mod:`~rigid_sim.core.goal_arclength`), and on the branches a
+whole turn away) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
