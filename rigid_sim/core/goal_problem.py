@@ -114,12 +114,12 @@ class GoalProblem:
         position, orientation = self.goal_pose
         if fraction >= 1.0:
             return position, orientation
-        end, turn = self.current_end()
+        end, turn = self._current_end()
         gap = rotation_vector((left_product(orientation) @ turn.inv().as_quat())[None])[0]
         return (end + fraction * (position - end),
                 (Rotation.from_rotvec(fraction * gap) * turn).as_quat())
 
-    def current_end(self):
+    def _current_end(self):
         """Return where the current motion ends: origin (3,) m and Rotation."""
         final, _ = self.single.fly(self.start_rows(self.current[None]),
                                    self.current[None] if self.wrench else None)
@@ -172,7 +172,7 @@ class GoalProblem:
         self.b = sum((columns[p] @ current[p] for p in fixed), np.zeros(6))
         self.current = (np.zeros(6) if self.wrench
                         else np.concatenate([current[p] for p in parts]))
-        self.turn, self.inertia, self.mass, self.lever_matrix = turn, inertia, mass, lever
+        self.turn, self.inertia, self.mass, self._lever_matrix = turn, inertia, mass, lever
         horizon = self.horizon
         if self.wrench:   # the displacement of a force or torque held for the horizon
             moment = np.trace(bodies.inertia_body[index]) / 3.0
@@ -236,7 +236,7 @@ class GoalProblem:
         if self.goal.unknowns == 'angular':
             return spin
         # The centre of mass keeps its velocity: the origin's changes by -spin x (R c).
-        return np.concatenate((self.lever_matrix @ spin, spin))
+        return np.concatenate((self._lever_matrix @ spin, spin))
 
     def start_rows(self, values):
         """Start rows (K, 13) of the body from unknowns (K, n)."""
@@ -302,7 +302,7 @@ class GoalProblem:
 
     def first_iterate(self):
         """Return the current motion corrected by the least move that closes its gap."""
-        end, turn = self.current_end()
+        end, turn = self._current_end()
         position, orientation = self.target
         gap = position - end
         turn_gap = rotation_vector((left_product(orientation)

@@ -9,9 +9,7 @@ goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them fro
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
 forward differences of copies of the body flown together in one compiled call. Of the
 solutions it finds (by continuation from the current motion, from the current motion
-corrected by the least move that closes its gap, where both fail by pseudo-arclength
-continuation through folds (:mod:`~rigid_sim.core.goal_arclength`), and on the branches a
-whole turn away) it
+corrected by the least move that closes its gap, and on the branches a whole turn away) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -28,7 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_sim.core import goal_arclength
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
@@ -67,11 +64,10 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
                       + int(np.log2(CONTINUATION_STAGE / SMALLEST_STAGE)) + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# pseudo-arclength continuation and its polish, the other starts (:func:`_starts`) and
-# the branches of whole turns. The node decides by it whether a goal is solved in the tick.
-WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 4)
-                      + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
-                 + goal_arclength.WORST_FLIGHTS - MAX_ITERATIONS)
+# other starts (:func:`_starts`) and the branches of whole turns. The node decides by it
+# whether a goal is solved in the tick.
+WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
+                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
 
 
 @dataclass(frozen=True)
@@ -259,8 +255,7 @@ class GoalSolver:
 
         The first solutions come from the continuation of the current motion
         (:meth:`_continued`, twist and angular unknowns) and from the corrected current
-        motion, the nearer taken; if neither converges, from the pseudo-arclength
-        continuation (:meth:`_followed`), then the other starts (:func:`_starts`).
+        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges).
         Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
@@ -273,11 +268,6 @@ class GoalSolver:
                 continue
             try:
                 found.append(solve(problem))
-            except NoConvergence:
-                pass
-        if not found:   # folds stopped the continuation: follow the curve through them
-            try:
-                found.append(self._followed(problem))
             except NoConvergence:
                 pass
         if not found:
@@ -340,22 +330,6 @@ class GoalSolver:
                 values, jacobian, done = newton.values, newton.jacobian, reach
         finally:
             problem.aim_at(*problem.goal_pose)
-        return newton
-
-    def _followed(self, problem):
-        """Newton from where the pseudo-arclength continuation crosses the goal.
-
-        The curve is followed on the coarse flight where there is one
-        (:mod:`~rigid_sim.core.goal_arclength`): it is long over a long flight.
-        """
-        problem.fly_on(problem.coarse or problem.fine)
-        values = goal_arclength.Arclength(problem).follow()
-        # Straight to the fine flight with its own Jacobian: a coarse Newton first would
-        # move the start off the curve by the coarse flight's error, which a long flight
-        # amplifies beyond the fine flight's basin.
-        problem.fly_on(problem.fine)
-        newton = Newton(problem, values)
-        newton.converge(TOLERANCE)
         return newton
 
     @staticmethod
