@@ -61,4 +61,16 @@ def alive(pid):
     return state not in ('Z', 'X')
 
 
+def _end_all_then_die(number, frame):
+    """End every group, then die of the signal ``number`` as the default action would."""
+    end_since(0)
+    signal.signal(number, signal.SIG_DFL)
+    os.kill(os.getpid(), number)
+
+
 atexit.register(end_since, 0)
+# A signal that ends the run (timeout(1)'s or a CI runner's SIGTERM, a closed terminal's
+# SIGHUP) skips atexit: a node a helper's timed-out run started ticked on for an hour.
+for _number in (signal.SIGTERM, signal.SIGHUP):
+    if signal.getsignal(_number) is signal.SIG_DFL:
+        signal.signal(_number, _end_all_then_die)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from rigid_sim.core.scene import build_world, parse_scene, SceneError
+from test_contact import assert_runs_repeat
 
 G = 9.81
 GROUND = {'normal': [0.0, 0.0, 1.0], 'offset': 0.0}
@@ -163,18 +164,7 @@ def test_exact_runs_repeat_to_the_same_bits():
     bodies = [body('a', {'type': 'box', 'size': [0.2, 0.2, 0.2]}, (0.0, 0.0, 0.5)),
               body('b', {'type': 'sphere', 'radius': 0.1}, (0.05, 0.02, 0.9), (0.1, 0.0, 0.0)),
               body('c', {'type': 'box', 'size': [0.3, 0.3, 0.3]}, (0.1, -0.05, 1.4))]
-    runs = []
-    for _ in range(2):
-        world = exact_world(bodies, restitution=0.6)
-        for _ in range(200):
-            world.step(0.01)
-        runs.append(world.y.copy())
-        world.reset()
-        for _ in range(200):
-            world.step(0.01)
-        runs.append(world.y.copy())
-    for run in runs[1:]:
-        np.testing.assert_array_equal(run, runs[0])
+    assert_runs_repeat(lambda: exact_world(bodies, restitution=0.6), 200)
 
 
 def test_an_unknown_mode_is_refused_by_key():

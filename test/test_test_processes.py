@@ -60,3 +60,32 @@ def test_a_test_that_fails_with_forked_nodes_running_leaves_none(tmp_path):
     while any(processes.alive(pid) for pid in pids):
         assert time.monotonic() < deadline, 'a forked node outlived its test'
         time.sleep(0.05)
+
+
+KEEPER = """
+import sys, time
+import processes
+child = processes.start([sys.executable, '-c', 'import time; time.sleep(600)'])
+print(child.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def test_a_run_ended_by_sigterm_ends_the_processes_it_started_first():
+    """timeout(1) ends a test run with SIGTERM, which skips atexit: the groups end anyway."""
+    import signal
+    run = subprocess.Popen([sys.executable, '-c', KEEPER], cwd=HERE, stdout=subprocess.PIPE,
+                           text=True, env=dict(os.environ, PYTHONPATH=os.pathsep.join(
+                               [str(HERE), os.environ.get('PYTHONPATH', '')])))
+    try:
+        child = int(run.stdout.readline())
+        assert processes.alive(child)
+        run.send_signal(signal.SIGTERM)
+        assert run.wait(timeout=GONE_TIMEOUT) == -signal.SIGTERM   # died of it, as before
+        deadline = time.monotonic() + GONE_TIMEOUT
+        while processes.alive(child):
+            assert time.monotonic() < deadline, 'the started process outlived the run'
+            time.sleep(0.05)
+    finally:
+        run.kill()
+        run.wait()
