@@ -5,6 +5,8 @@
 :mod:`rigid_sim.main` installs the stop signals' handlers before importing this module,
 which brings in rclpy, numba and scipy.
 """
+import sys
+
 import rclpy
 from rclpy.executors import ExternalShutdownException
 
@@ -17,6 +19,13 @@ from rigid_sim.parameters import ParameterError
 # s; the executor waits at most this long for work, so a signal that arrives while it
 # waits (a slow rate, a paused loop) is acted on within this time.
 SIGNAL_LATENCY = 0.05
+# s a thread may keep the interpreter while another waits for it (Python's default 5 ms).
+# A worker's Python (a goal solve, a scene edit) and the executor take turns: an answer
+# needs the interpreter several times, each a wait of up to this. Measured on the
+# control-latency bench's goal rows, two runs each, quiet machine: at 5 ms a springs goal
+# held parameter calls to p99 135-159 ms, a goal flood to 67-87 ms (slowest 263-294 ms);
+# at 0.5 ms 6-8 ms and 10-13 ms (slowest 15-21 ms) (docs/performance.md).
+SWITCH_INTERVAL = 0.0005
 
 
 def run(stopper):
@@ -34,6 +43,7 @@ def run(stopper):
         return 1
     freeze_long_lived_objects()   # no full garbage collection stalls a tick from here on
     node.owner.keeps_heap_frozen = True   # nor one over what a scene edit builds
+    sys.setswitchinterval(SWITCH_INTERVAL)
     executor = make_executor()
     executor.add_node(node)
     stopper.spinning = True

@@ -10,6 +10,7 @@ node and executor, so no ROS graph is needed.
 import gc
 from types import SimpleNamespace
 import signal
+import sys
 import weakref
 
 from rigid_sim import main as entry
@@ -54,15 +55,19 @@ def test_objects_alive_before_the_first_spin_are_frozen(monkeypatch):
     monkeypatch.setattr(spin, 'RigidSimNode', _StandInNode)
     monkeypatch.setattr(spin, 'make_executor', lambda: executor)
     handlers = {number: signal.getsignal(number) for number in entry.STOP_SIGNALS}
+    interval = sys.getswitchinterval()
     try:
         assert spin.run(stopper) == 0
+        switched = sys.getswitchinterval()
     finally:
         for number, handler in handlers.items():   # run ignores them on its way out
             signal.signal(number, handler)
         gc.unfreeze()
+        sys.setswitchinterval(interval)
     frozen, walked = executor.seen
     assert frozen > 0 and not walked
     assert executor.node.owner.keeps_heap_frozen   # and what its scene edits build
+    assert switched == spin.SWITCH_INTERVAL   # and its threads take turns often
 
 
 def test_freezing_collects_the_garbage_first():
