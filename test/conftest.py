@@ -75,3 +75,18 @@ def write_scene(tmp_path):
         path.write_text(text)
         return str(path)
     return write
+
+
+@pytest.fixture
+def every_shape_kind(monkeypatch):
+    """Compile the contact stage for every shape kind, whatever the scene's are.
+
+    Each set of kinds is a stage of its own, compiled cold in ~20 s of CPU, and the contact
+    tests' scenes make a dozen sets: one stage serves them all. It differs from a scene's
+    own only in branches that scene never takes; ``test_compile_work.py`` checks that a
+    scene compiles its own set alone, and ``test_contact.py`` that the two step alike.
+    """
+    from rigid_sim.core import contact
+    from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
+    every = contact.ShapeKinds((SPHERE, BOX, CAPSULE, CYLINDER))
+    monkeypatch.setattr(contact, 'ShapeKinds', lambda kinds: every)

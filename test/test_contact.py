@@ -17,6 +17,8 @@ from scipy.spatial.transform import Rotation
 from rigid_sim.core.scene import build_world, load_scene, parse_scene, SceneError
 from rigid_sim.resources import find_scene
 
+pytestmark = pytest.mark.usefixtures('every_shape_kind')   # one stage compile (conftest)
+
 G = 9.81
 L_BLOCK = os.path.join(os.path.dirname(__file__), '..', 'config', 'meshes', 'l_block.obj')
 DOWN = [0.0, 0.0, -G]
@@ -389,3 +391,18 @@ def test_warm_up_compiles_the_contact_stage_and_changes_nothing():
     np.testing.assert_array_equal(world.contact.work.last_lam, before[1])
     assert world.contact.count == before[2] == 4
     assert world.contact.work.last_count[0] == 4
+
+
+def test_a_scenes_own_stage_steps_as_the_stage_of_every_kind(monkeypatch):
+    """The stage compiled for a scene's kinds alone gives the bits of the one for all kinds."""
+    bodies = [cube('a', 0.2, (0.0, 0.0, 0.5), angular=(1.0, 2.0, 0.5)),
+              ball('b', 0.1, (0.05, 0.02, 0.9), linear=(0.1, 0.0, 0.0)),
+              cube('c', 0.3, (0.1, -0.05, 1.4), angular=(0.0, 1.0, 3.0))]
+    runs = []
+    for _ in range(2):
+        world = contact_world(bodies, restitution=0.3)
+        for _ in range(300):
+            world.step(0.01)
+        runs.append(world.y.copy())
+        monkeypatch.undo()   # the scene's own kinds from here on: spheres and boxes
+    np.testing.assert_array_equal(runs[1], runs[0])

@@ -14,6 +14,8 @@ import pytest
 from rigid_sim.core.scene import build_world, parse_scene, SceneError
 from test_contact import assert_runs_repeat
 
+pytestmark = pytest.mark.usefixtures('every_shape_kind')   # one stage compile (conftest)
+
 G = 9.81
 GROUND = {'normal': [0.0, 0.0, 1.0], 'offset': 0.0}
 E, H0 = 0.8, 1.0

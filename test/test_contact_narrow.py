@@ -20,6 +20,8 @@ from rigid_sim.core.contact.narrow import FACE_PREFERENCE
 from rigid_sim.core.inertia import shape_mass_properties
 from rigid_sim.core.state import RigidBodies, initial_state
 
+pytestmark = pytest.mark.usefixtures('every_shape_kind')   # one stage compile (conftest)
+
 CASES = 40
 
 

@@ -21,6 +21,8 @@ from rigid_sim.core.goal_problem import FD_STEP
 from rigid_sim.core.goals import Goal, GoalSolver
 from rigid_sim.core.scene import build_world, parse_scene
 
+pytestmark = pytest.mark.usefixtures('every_shape_kind')   # one stage compile (conftest)
+
 G, E, RADIUS, MASS = 9.81, 0.8, 0.1, 1.0
 RESTING = 0.2    # m/s, the contact's resting speed: a slower approach ends at rest
 START = np.array([0.0, 0.0, 1.0])
