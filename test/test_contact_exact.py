@@ -177,6 +177,18 @@ def test_an_unknown_mode_is_refused_by_key():
     assert "'velocity', 'exact'" in refused.value.reason
 
 
+@pytest.mark.parametrize('kind', ['capsule', 'cylinder'])
+def test_exact_mode_refuses_shapes_it_has_no_impact_gap_for(kind):
+    """Impacts are found on the gap of spheres and boxes: no other shape is run as a box."""
+    pill = dict(body('p', {'type': 'cylinder', 'radius': 0.1, 'length': 0.3}, (0, 0, 1)),
+                collision={'type': kind, 'radius': 0.1, 'length': 0.3})
+    with pytest.raises(SceneError) as refused:
+        parse_scene({'effects': {'contact': {'mode': 'exact'}}, 'bodies': [pill]})
+    assert refused.value.key == 'bodies[0].collision'
+    assert kind in refused.value.reason and 'velocity' in refused.value.reason
+    parse_scene({'effects': {'contact': {'mode': 'velocity'}}, 'bodies': [pill]})
+
+
 def test_warm_up_compiles_exact_mode_and_changes_nothing():
     """The node warms a world up before it ticks: exact mode's kernels are among those."""
     from rigid_sim.core.warm_up import warm_up

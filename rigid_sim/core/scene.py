@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigid_sim.core.contact import Contact
-from rigid_sim.core.contact.shapes import collision_shape, default_collision
+from rigid_sim.core.contact.shapes import collision_shape, default_collision, exact_refusal
 from rigid_sim.core.inputs import (
     DEFAULT_MAX_FORCE, DEFAULT_MAX_TORQUE, AppliedWrenches)
 from rigid_sim.core.effects import REGISTRY as EFFECTS
@@ -290,6 +290,9 @@ def _contact(listed, bodies):
                 raise Mistake(f'bodies[{i}].collision', f'a {body.shape["type"]} body needs '
                               'a collision shape (sphere, box, capsule, cylinder or none) '
                               'when the scene lists contact: meshes do not collide yet')
+            refusal = exact_refusal(body.collision, settings.get('mode'))
+            if refusal is not None:
+                raise Mistake(f'bodies[{i}].collision', refusal)
     return settings
 
 
@@ -395,6 +398,9 @@ def _contact_stage(scene, bodies):
             raise ValueError(f'body {body.name!r}: a {body.shape["type"]} body needs a '
                              'collision shape (sphere, box, capsule, cylinder or none) in a '
                              'scene with contact')
+        refusal = exact_refusal(body.collision, scene.contact.get('mode'))
+        if refusal is not None:
+            raise ValueError(f'body {body.name!r}: {refusal}')
     return Contact(bodies, [body.collision for body in scene.bodies], **scene.contact)
 
 

@@ -37,6 +37,18 @@ def collision_shape(value, key):
     return fields(value, key, {'type': (raw, REQUIRED), **COLLISION[kind]})
 
 
+# Exact mode finds an impact's moment on the gap of spheres and boxes alone (impact.py).
+EXACT_KINDS = ('sphere', 'box', 'none')
+
+
+def exact_refusal(collision, mode):
+    """Why a body of ``collision`` shape cannot be in a scene of contact ``mode``; None: it can."""
+    if mode == 'exact' and collision['type'] not in EXACT_KINDS:
+        return (f'a {collision["type"]} collision shape has no exact-mode impacts yet (spheres '
+                'and boxes have): use contact mode velocity')
+    return None
+
+
 def default_collision(shape):
     """Return the collision shape of a body whose ``shape`` is ``shape``; None: none by default."""
     if shape['type'] in ('sphere', 'box', 'cylinder'):
