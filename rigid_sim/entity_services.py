@@ -266,8 +266,8 @@ class EntitiesAnswer:
         if self._limit is not None and len(self._found) > self._limit:
             self._response.result = result(
                 si_msg.Result.RESULT_OPERATION_FAILED,
-                f'{len(self._found)} entities match, above the {self._limit} states one answer '
-                'may carry (parameter max_answer_states): narrow the filter')
+                f'{len(self._found)} entities match, more than one answer may carry '
+                f'(parameter max_answer_states = {self._limit}): narrow the filter')
             return True
         if self._frames is not None and not self._build_states(until):
             return False

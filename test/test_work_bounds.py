@@ -213,7 +213,7 @@ def test_get_entities_states_refuses_more_states_than_one_answer_may_carry(rigid
     refused = states()
     assert refused.result.result == Result.RESULT_OPERATION_FAILED
     assert '3 entities match' in refused.result.error_message
-    assert 'max_answer_states' in refused.result.error_message
+    assert 'max_answer_states = 2' in refused.result.error_message
     assert list(refused.entities) == [] and list(refused.states) == []
     two = states('^[ab]$')
     assert two.result.result == Result.RESULT_OK
