@@ -409,3 +409,30 @@ def test_a_goal_beyond_the_speed_limit_is_refused_with_the_speed_it_needs():
     assert (scene.bodies[0].goal['max_speed'], scene.bodies[0].goal['max_spin']) == (3.0, 4.0)
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.max_speed'):
         parse_scene({'bodies': [dict(BOX, goal={'max_speed': -1.0})]})
+
+
+def test_a_ten_second_target_the_oracle_flew_to_on_the_damped_spring_is_reached():
+    """T = 10 s on the damped spring, dt 1e-2: the oracle's flight makes the target.
+
+    The world's flight with the solution ends at the target (1e-9); the oracle's flight
+    with it ends there to the world's own step error, which the oracle measures on the
+    known twist: the world's and the oracle's end poses of that twist differ by
+    ``step_error``, and the solution, another start of the same discrete flight, may
+    differ from its oracle flight by no more than ten times that.
+    """
+    effects, until, step = {'springs': [SPRING]}, 10.0, 1e-2
+    base = np.array([0.1, 0.0, 0.0, 1.0, 2.0, 3.0])
+    twist = base + np.array([0.3, -0.2, 0.1, 0.2, -0.3, 0.1])
+    goal = Goal(0, *oracle_pose(effects, twist[:3], twist[3:], until), until)
+    known = scene_world(effects)
+    known.y = with_twist(known.bodies, known.y, 0, twist[:3], twist[3:])
+    step_error = max(distance(flown(known, step, until), goal))
+    world = scene_world(effects)
+    solver = GoalSolver(world, step)
+    solution = solver.solve(goal)
+    solver.apply(solution)
+    assert max(distance(flown(world, step, solution.arrival), goal)) <= ACCEPTED
+    reached, turned = oracle_pose(effects, solution.linear_velocity,
+                                  solution.angular_velocity, until)
+    assert np.linalg.norm(reached - goal.position) <= 10.0 * step_error
+    assert physics_cases.rotation_error(turned, goal.orientation) <= 10.0 * step_error
