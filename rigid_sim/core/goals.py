@@ -182,6 +182,26 @@ def _check_speed(goal, linear, angular):
                           f'goal max_spin {goal.max_spin:.3g} rad/s')
 
 
+def _with_condition(error, newton):
+    """``error``'s reason and the condition of the Jacobian where its iterations stopped.
+
+    A large condition says why: the end pose barely moves along some change of the
+    unknowns (near a fold of the flight's map), which holds Newton's iterates there.
+    """
+    if newton.jacobian is None:
+        return str(error)
+    return f'{error}, the Jacobian\'s condition there {newton.condition():.3g}'
+
+
+def _unconverged(tried, error):
+    """Why a goal none of ``tried`` starts solved within the work bound is refused."""
+    return (f'no convergence from any of its {tried} starts within the work bound (at most '
+            f'{WORST_FLIGHTS} flights; the last start: {error}). Newton\'s method converges '
+            f'only from starts near a solution, and the longer a flight the scene torques '
+            f'(a spring, a wrench off the centre of mass) the nearer they must be: a nearer '
+            f'goal time is solved more often')
+
+
 def _unreached(goal, problem, newton, errors):
     """Why a solution that leaves ``errors`` (m, rad) at the goal is refused."""
     left = f'{errors[0]:.3g} m and {errors[1]:.3g} rad from the goal'
@@ -271,7 +291,12 @@ class GoalSolver:
             except NoConvergence:
                 pass
         if not found:
-            found = [self._converged(problem, _starts(problem, first)[1:])]
+            starts = _starts(problem, first)[1:]
+            try:
+                found = [self._converged(problem, starts)]
+            except NoConvergence as error:
+                tried = len(starts) + 1 + (problem.goal.unknowns in CONTINUED)
+                raise NoConvergence(_unconverged(tried, error)) from None
         best = min(found, key=lambda newton: problem.distance(newton.values))
         nearest = problem.distance(best.values)
         seen = [newton.values for newton in found] + [first]
@@ -349,9 +374,9 @@ class GoalSolver:
                     problem.fly_on(problem.fine)
                     newton.converge(TOLERANCE, bound, iterations)
                 return newton
-            except NoConvergence:
+            except NoConvergence as error:
                 if number + 1 == len(starts):
-                    raise
+                    raise NoConvergence(_with_condition(error, newton)) from None
 
     def rollout(self, body, unknowns, axes, copies):
         """Return the :class:`Rollout` of ``copies`` copies of ``body``, one per integrator."""
