@@ -475,9 +475,9 @@ def test_a_ten_second_spring_goal_it_cannot_solve_is_refused_within_the_work_bou
     Over 10 s this spring's flight is chaotic (docs/goals.md: the end pose's sensitivity to
     the twist grows as exp(0.39 t)), and Newton converges only from starts within about
     0.01-0.1 rad/s of a solution. This target, made by the oracle's flight of a change of
-    0.44 rad/s, is one no start reaches: the refusal must say so, name the work bound, and
-    stay within it (the flights of all copies, counted as the rollouts fly them), leaving
-    the world as it was.
+    (-0.26, -0.23, 0.25) m/s and (0.44, 0.1, -0.31) rad/s, is one no start reaches: the
+    refusal must say so, name the work bound, and stay within it (the flights of all
+    copies, counted as the rollouts fly them), leaving the world as it was.
     """
     effects, until, step = {'springs': [SPRING]}, 10.0, 1e-2
     twist = np.array([-0.16, -0.23, 0.25, 1.44, 2.1, 2.69])
