@@ -70,6 +70,13 @@ CASES = (
          spin=(10.0, 15.0, 15.0)),
     Case('springs_long', 'the damped spring of `springs`, T = 10 s, dt 1e-2',
          {'springs': [SPRING]}, 1e-2, horizon=10.0, baseline=False),
+    Case('tumbling_long', 'the torque-free box of `tumbling`, T = 10 s, exact flow', {},
+         None, horizon=10.0, baseline=False),
+    Case('damping_long', 'the damping of `damping`, T = 10 s, dt 1e-2',
+         {'damping': {'linear': 0.5, 'angular': 0.3}}, 1e-2, horizon=10.0, baseline=False),
+    Case('wrench_long', 'the wrench unknowns of `wrench`, T = 10 s, dt 1e-2',
+         {'gravity': {'acceleration': [0, 0, -9.81]}}, 1e-2, 'wrench', (1.0, 0.01),
+         horizon=10.0, baseline=False),
 )
 CASES_BY_KEY = {case.key: case for case in CASES}
 DEFAULT_CASES = ('tumbling', 'gravity', 'damping', 'springs', 'wrench', 'spinning')

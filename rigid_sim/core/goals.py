@@ -9,7 +9,9 @@ goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them fro
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
 forward differences of copies of the body flown together in one compiled call. Of the
 solutions it finds (by continuation from the current motion, from the current motion
-corrected by the least move that closes its gap, and on the branches a whole turn away) it
+corrected by the least move that closes its gap, on the branches a whole turn away and,
+where a flight is one exact step, by deflation of those found,
+:mod:`~rigid_sim.core.goal_deflation`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -27,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
+from rigid_sim.core.goal_deflation import Deflated
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
@@ -58,16 +61,22 @@ CONTINUED = ('twist', 'angular')   # the unknowns whose solutions branch with th
 SMALLEST_STAGE = 1.0 / 32.0
 SAME_START = 0.05
 SAME_SOLUTION = 1e-9
+# Deflated solves after the branch walk, where a flight is one exact step (twist and
+# angular unknowns of a free body: a flight costs microseconds, the solve's Python most):
+# from the current motion and from the corrected one, BRANCH_ITERATIONS each. On a flight
+# of many steps they cost 2.6 times the median solve (springs, T = 2 s) for 1 in 100.
+DEFLATED_STARTS = 2
 # The continuation's tries at most: stages never grow, so at most 1 / (SMALLEST_STAGE / 2)
 # succeed, and a stage halves at most log2(CONTINUATION_STAGE / SMALLEST_STAGE) + 1 times.
 CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
                       + int(np.log2(CONTINUATION_STAGE / SMALLEST_STAGE)) + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# other starts (:func:`_starts`) and the branches of whole turns. The node decides by it
-# whether a goal is solved in the tick.
+# other starts (:func:`_starts`), the branches of whole turns and the deflated solves.
+# The node decides by it whether a goal is solved in the tick.
 WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
-                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS))
+                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
+                                            + DEFLATED_STARTS))
 
 
 @dataclass(frozen=True)
@@ -182,6 +191,26 @@ def _check_speed(goal, linear, angular):
                           f'goal max_spin {goal.max_spin:.3g} rad/s')
 
 
+def _with_condition(error, newton):
+    """``error``'s reason and the condition of the Jacobian where its iterations stopped.
+
+    A large condition says why: the end pose barely moves along some change of the
+    unknowns (near a fold of the flight's map), which holds Newton's iterates there.
+    """
+    if newton.jacobian is None:
+        return str(error)
+    return f'{error}, the Jacobian\'s condition there {newton.condition():.3g}'
+
+
+def _unconverged(tried, error):
+    """Why a goal none of ``tried`` starts solved within the work bound is refused."""
+    return (f'no convergence from any of its {tried} starts within the work bound (at most '
+            f'{WORST_FLIGHTS} flights; the last start: {error}). Newton\'s method converges '
+            f'only from starts near a solution, and the longer a flight the scene torques '
+            f'(a spring, a wrench off the centre of mass) the nearer they must be: a nearer '
+            f'goal time is solved more often')
+
+
 def _unreached(goal, problem, newton, errors):
     """Why a solution that leaves ``errors`` (m, rad) at the goal is refused."""
     left = f'{errors[0]:.3g} m and {errors[1]:.3g} rad from the goal'
@@ -271,7 +300,12 @@ class GoalSolver:
             except NoConvergence:
                 pass
         if not found:
-            found = [self._converged(problem, _starts(problem, first)[1:])]
+            starts = _starts(problem, first)[1:]
+            try:
+                found = [self._converged(problem, starts)]
+            except NoConvergence as error:
+                tried = len(starts) + 1 + (problem.goal.unknowns in CONTINUED)
+                raise NoConvergence(_unconverged(tried, error)) from None
         best = min(found, key=lambda newton: problem.distance(newton.values))
         nearest = problem.distance(best.values)
         seen = [newton.values for newton in found] + [first]
@@ -301,6 +335,33 @@ class GoalSolver:
                                for shift in problem.whole_turns(newton.values, first)]
             seen.append(newton.values)
         problem.fly_on(problem.fine)
+        if problem.exact and problem.goal.unknowns in CONTINUED:
+            best = self._deflated(problem, best, (problem.current, first))
+        return best
+
+    @staticmethod
+    def _deflated(problem, best, starts):
+        """Return the nearer of ``best`` and what Newton finds with ``best`` deflated away.
+
+        Two solutions of an asymmetric body may be near ties that no whole turn links;
+        Newton from ``starts`` on the equations less the solutions found
+        (:class:`~rigid_sim.core.goal_deflation.Deflated`) reaches the other.
+        """
+        roots, nearest = [best.values], problem.distance(best.values)
+        for start in starts:
+            newton = Newton(Deflated(problem, roots), start)
+            reach = BRANCH_SLACK * nearest   # abandoned beyond, as a branch is
+            try:
+                newton.converge(TOLERANCE, lambda u: problem.distance(u) <= reach,
+                                BRANCH_ITERATIONS)
+            except NoConvergence:
+                continue
+            roots.append(newton.values)
+            if problem.distance(newton.values) < nearest * (1.0 - SAME_SOLUTION):
+                # Its Jacobian is the deflated one: the true one comes with a fresh Newton.
+                best, nearest = Newton(problem, newton.values), problem.distance(newton.values)
+                best.converge(TOLERANCE)
+                best.iterations = newton.iterations
         return best
 
     @staticmethod
@@ -349,9 +410,9 @@ class GoalSolver:
                     problem.fly_on(problem.fine)
                     newton.converge(TOLERANCE, bound, iterations)
                 return newton
-            except NoConvergence:
+            except NoConvergence as error:
                 if number + 1 == len(starts):
-                    raise
+                    raise NoConvergence(_with_condition(error, newton)) from None
 
     def rollout(self, body, unknowns, axes, copies):
         """Return the :class:`Rollout` of ``copies`` copies of ``body``, one per integrator."""
