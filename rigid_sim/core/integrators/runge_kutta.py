@@ -177,7 +177,7 @@ def _squared_ratio(change, slope):
 
 
 # Inlined: a call from the per-body kernel spilled every register its stages hold around
-# it (15 ns of rk4's 170 at 1e4 bodies, docs/performance.md).
+# it (13-20 ns of rk4's 170-190 at 1e4 bodies; docs/performance.md, "The rate's call").
 @helper(inline='always')
 def _step_rate(first, second, over_a21):
     """``z = h rho`` from a step's first two slopes ``k1``, ``k2`` (slope tuples).
