@@ -176,7 +176,9 @@ def _squared_ratio(change, slope):
     return moved / size if size > 0.0 else math.inf
 
 
-@helper
+# Inlined: a call from the per-body kernel spilled every register its stages hold around
+# it (13-20 ns of rk4's 170-190 at 1e4 bodies; docs/performance.md, "The rate's call").
+@helper(inline='always')
 def _step_rate(first, second, over_a21):
     """``z = h rho`` from a step's first two slopes ``k1``, ``k2`` (slope tuples).
 
