@@ -7,8 +7,13 @@ each body's own size, mass and inertia, so a microgram body is held to the same 
 accuracy as a kilogram one (an absolute tolerance would swamp the first and starve the
 second). The right-hand side is one compiled call. The error estimate of every internal step
 (the difference of the embedded fourth-order solution, which scipy's stepper computes to
-control the step) is reported per body in the units of :mod:`rigid_sim.core.error_estimate`,
-summed over the internal steps of a call.
+control the step) is the fourth-order solution's error, while the fifth-order one is kept:
+on ``y' = lambda y`` the difference is ``97 z^5 / 120000`` and the kept solution's error
+``-z^6 / 3600`` (``z = h lambda``; from scipy's tableau), so the kept error is
+``100 / 291 z`` times the difference. As for ``rk4`` (:class:`~rigid_sim.core.integrators.
+runge_kutta.Tableau`), ``z`` is the local rate the first two stages measure, per body, and
+the difference times ``min(1, 100 z / 291)`` is the estimate, reported per body in the units
+of :mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
 
 That sum is what a step reports, so it is what is held to ``tolerance``: each internal step
 of length ``h`` in a step of ``dt`` must keep its estimate, the largest over the components
@@ -33,6 +38,7 @@ from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slope_of,
                                                        to_internal, to_public)
+from rigid_sim.core.integrators.runge_kutta import step_rates
 from rigid_sim.core.kinematics import check_substep
 
 # Internal steps one call may take at most: scipy's stepper costs 0.2 ms a step for a few
@@ -43,25 +49,50 @@ MAX_INTERNAL_STEPS = 50
 # Body-steps (internal steps times bodies) one call may take at most: the same bound where
 # the compiled right-hand side, not the stepper, is most of the cost.
 INTERNAL_WORK = 10_000
+# The kept fifth-order solution's error over the embedded difference, per unit z = h lambda
+# (module docstring; the leading terms of scipy's RK45 tableau on y' = lambda y).
+RATE_WEIGHT = 100.0 / 291.0
 
 
 def per_unit_step(stepper):
     """Return scipy's ``stepper`` class with the error test this module holds a step to.
 
-    Its step is accepted when ``max |error_k| / allowed_k < |h|``: ``allowed`` (per component,
-    set on the instance before its first step) is the error a step may make per second. Only
-    the norm is replaced (scipy's ``_estimate_error_norm``, the method its step-size control
-    calls); scipy still chooses, rejects and grows the steps.
+    Its step is accepted when its estimate (:func:`own_errors`, the largest over the bodies)
+    is below ``per_second |h|``, the scaled error a step may make per second; ``scale``
+    (N, 13) and ``per_second`` are set on the instance before its first step, and
+    ``body_error`` (N,) holds the estimate of the step last tried, the one kept once ``step``
+    returns. Only the norm is replaced (scipy's ``_estimate_error_norm``, the method its
+    step-size control calls); scipy still chooses, rejects and grows the steps.
     """
     # A private method (unchanged since scipy 1.0): should it change, the estimates' test of
     # dopri5 on the thin rod finds steps kept above their tolerance.
     class PerUnitStep(stepper):
-        allowed = None   # (n,) error per second of step, the reported unit over its scale
+        scale = None        # (N, 13) each component's scale (rigid_sim.core.error_estimate)
+        per_second = None   # scaled error a step may make per second of it
+        body_error = None   # (N,) the last step's estimate, scaled
 
         def _estimate_error_norm(self, K, h, scale):
-            return np.max(np.abs(self._estimate_error(K, h)) / self.allowed) / abs(h)
+            self.body_error = own_errors(self._estimate_error(K, h), K, self.scale,
+                                         1.0 / self.A[1, 0])
+            return self.body_error.max() / self.per_second / abs(h)
 
     return PerUnitStep
+
+
+def own_errors(difference, stages, scale, over_a21):
+    """(N,) scaled error of the kept solution of one step, from the embedded ``difference``.
+
+    ``difference`` (N * 13,) is the pair's difference, ``stages`` the step's slopes (S, N * 13),
+    ``scale`` (N, 13). Each body's largest scaled component of the difference, times
+    ``min(1, RATE_WEIGHT z)`` with ``z`` its rate over the step (0, not measured: the
+    difference itself, which bounds the error).
+    """
+    shape = scale.shape
+    size = np.max(np.abs(difference.reshape(shape)) / scale, axis=1)
+    rates = step_rates(stages[0].reshape(shape), stages[1].reshape(shape), over_a21,
+                       np.empty(shape[0]))
+    factor = np.where(rates > 0.0, np.minimum(1.0, RATE_WEIGHT * rates), 1.0)
+    return size * factor
 
 
 class StepsCapped(ArithmeticError):
@@ -132,8 +163,7 @@ class Dopri5(Integrator):
     order = 5
     adaptive = True
     bound = safeguards.UNBOUNDED   # its error control chooses the internal steps
-    estimate_order = 4             # the embedded fourth-order solution's error, h^5
-    estimate_bounds = True         # of the fourth-order solution: the fifth is kept
+    estimate_order = 5             # the embedded difference times z: h^6
     evaluations_per_step = 0       # counted as they happen
 
     def __init__(self, system, tolerance=1e-6):
@@ -184,7 +214,7 @@ class Dopri5(Integrator):
                                atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
         # The error test (rtol and atol above only feed scipy's own norm, which it replaces).
-        solver.allowed = self.tolerance / span * scale.ravel()
+        solver.scale, solver.per_second = scale, self.tolerance / span
         while solver.status == 'running':
             if self._left == 0:
                 self._step_size = solver.h_abs   # where the next call starts again
@@ -197,10 +227,7 @@ class Dopri5(Integrator):
             message = solver.step()
             if solver.status == 'failed':
                 raise FloatingPointError(f'dopri5 failed: {message}')
-            # The embedded pair's difference, as the stepper forms it (K: its stages, E: the
-            # weights of their difference), per body in scaled units.
-            difference = (solver.h_previous * (solver.K.T @ solver.E)).reshape(shape)
-            self.error += np.max(np.abs(difference) / scale, axis=1)
+            self.error += solver.body_error   # of the step kept
         # The step the error estimate proposes next, not the last one cut short by `end`.
         self._step_size = solver.h_abs
         from_body_axes(np.ascontiguousarray(solver.y.reshape(shape)), y)
