@@ -264,10 +264,9 @@ FLOOR = 1e-13   # scaled error below which estimate and truth are both round-off
 ASYMPTOTIC = 1e-3
 # An estimate measured beyond 10x above the truth, with the factor it stays within
 # (docs/accuracy.md, "Error estimates"): rk4's and rk4_world's rate-scaled difference under
-# the damped spring (10.4 to 11.7x; rk4_world 10.8x); dopri5's on the rod's first steps, a
-# spin about a fixed axis: there the kept solution's leading error, -z^6/3600 on y' = i w y,
-# only changes the quaternion's length, which the step normalises away, and what is left,
-# z^7/5040, is 0.29 z^2 of the difference where the rate predicts 0.34 z (34x measured).
+# the damped spring (10.4 to 11.7x; rk4_world 10.8x); dopri5's on the rod's first step (34x):
+# its first internal steps see the body-axes L's coupling through I_min = 1e-4 (z = 1e4 to
+# 4e3 from the stages), where the leading term says nothing and the difference is kept whole.
 OUTSIDE_BAND = {('rk4', 'pushed_damped'): 15.0, ('rk4_world', 'pushed_damped'): 15.0,
                 ('dopri5', 'rod'): 50.0}
 # The largest true error a method that declares what its estimate omits (``estimate_omits``:

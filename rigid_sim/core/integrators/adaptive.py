@@ -9,11 +9,15 @@ second). The right-hand side is one compiled call. The error estimate of every i
 (the difference of the embedded fourth-order solution, which scipy's stepper computes to
 control the step) is the fourth-order solution's error, while the fifth-order one is kept:
 on ``y' = lambda y`` the difference is ``97 z^5 / 120000`` and the kept solution's error
-``-z^6 / 3600`` (``z = h lambda``; from scipy's tableau), so the kept error is
-``100 / 291 z`` times the difference. As for ``rk4`` (:class:`~rigid_sim.core.integrators.
-runge_kutta.Tableau`), ``z`` is the local rate the first two stages measure, per body, and
-the difference times ``min(1, 100 z / 291)`` is the estimate, reported per body in the units
-of :mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
+``-z^6 / 3600 + z^7 / 5040`` (``z = h lambda``; from scipy's tableau), so the kept error is
+``100 / 291 z`` times the difference. A spin turns the quaternion with ``lambda = i w / 2``:
+there the ``z^6`` term only changes its length, which the step's normalisation takes away,
+and the turn that is left, ``(1/5040 + 1/3600) |z|^7``, is ``0.589 |z|^2`` times the
+difference. As for ``rk4`` (:class:`~rigid_sim.core.integrators.runge_kutta.Tableau`), the
+rates are what the first two stages measure, per body (:func:`_part_rates`): the estimate is
+the difference times ``min(1, 100 z / 291 + 0.589 s^2)``, ``z`` the rate of the position,
+momentum and body-axes angular momentum, ``s`` the quaternion's. It is reported per body in
+the units of :mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
 
 That sum is what a step reports, so it is what is held to ``tolerance``: each internal step
 of length ``h`` in a step of ``dt`` must keep its estimate, the largest over the components
@@ -28,17 +32,18 @@ interrupt. The internal steps of one call are capped (:data:`MAX_INTERNAL_STEPS`
 a large world: :data:`INTERNAL_WORK` body-steps): past the cap the call gives up with
 :class:`StepsCapped`, the state kept, and says so.
 """
+import math
+
 import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
-from rigid_sim.core.compiled import kernel
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slope_of,
                                                        to_internal, to_public)
-from rigid_sim.core.integrators.runge_kutta import step_rates
 from rigid_sim.core.kinematics import check_substep
 
 # Internal steps one call may take at most: scipy's stepper costs 0.2 ms a step for a few
@@ -49,9 +54,10 @@ MAX_INTERNAL_STEPS = 50
 # Body-steps (internal steps times bodies) one call may take at most: the same bound where
 # the compiled right-hand side, not the stepper, is most of the cost.
 INTERNAL_WORK = 10_000
-# The kept fifth-order solution's error over the embedded difference, per unit z = h lambda
-# (module docstring; the leading terms of scipy's RK45 tableau on y' = lambda y).
+# The kept fifth-order solution's error over the embedded difference, per unit z = h lambda,
+# and for a spin per unit s^2 (module docstring; scipy's RK45 tableau on y' = lambda y).
 RATE_WEIGHT = 100.0 / 291.0
+SPIN_WEIGHT = (1.0 / 5040.0 + 1.0 / 3600.0) / (97.0 / 120000.0)
 
 
 def per_unit_step(stepper):
@@ -84,15 +90,59 @@ def own_errors(difference, stages, scale, over_a21):
 
     ``difference`` (N * 13,) is the pair's difference, ``stages`` the step's slopes (S, N * 13),
     ``scale`` (N, 13). Each body's largest scaled component of the difference, times
-    ``min(1, RATE_WEIGHT z)`` with ``z`` its rate over the step (0, not measured: the
-    difference itself, which bounds the error).
+    ``min(1, RATE_WEIGHT z + SPIN_WEIGHT s^2)`` with its rates (:func:`_part_rates`); none
+    measured (both 0) or not finite: the difference itself, which bounds the error.
     """
     shape = scale.shape
-    size = np.max(np.abs(difference.reshape(shape)) / scale, axis=1)
-    rates = step_rates(stages[0].reshape(shape), stages[1].reshape(shape), over_a21,
-                       np.empty(shape[0]))
-    factor = np.where(rates > 0.0, np.minimum(1.0, RATE_WEIGHT * rates), 1.0)
-    return size * factor
+    return _own_errors(difference.reshape(shape), stages[0].reshape(shape),
+                       stages[1].reshape(shape), scale, over_a21, np.empty(shape[0]))
+
+
+@kernel
+def _own_errors(difference, first, second, scale, over_a21, out):
+    """:func:`own_errors` on (N, 13) arrays, into ``out`` (N,)."""
+    for i in range(scale.shape[0]):
+        size = 0.0
+        for k in range(13):
+            size = max(size, abs(difference[i, k]) / scale[i, k])
+        z, s = _part_rates(first, second, i, over_a21)
+        factor = RATE_WEIGHT * z + SPIN_WEIGHT * s * s
+        out[i] = size * (min(1.0, factor) if 0.0 < factor < math.inf else 1.0)
+    return out
+
+
+@helper
+def _squared_ratio(first, second, i, begin, end):
+    """``|k2 - k1|^2 / |k1|^2`` over components ``begin:end`` of row ``i`` (0 if unmoved)."""
+    moved, size = 0.0, 0.0
+    for k in range(begin, end):
+        moved += (second[i, k] - first[i, k]) ** 2
+        size += first[i, k] ** 2
+    if moved == 0.0:
+        return 0.0
+    return moved / size if size > 0.0 else math.inf
+
+
+@helper
+def _part_rates(first, second, i, over_a21):
+    """Rates ``z`` and ``s`` of body ``i``'s step from its first two slopes (N, 13 each).
+
+    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h`` times the local rate
+    (Hairer and Wanner's stiffness detection), taken apart for each part of the state, as
+    :func:`rigid_sim.core.integrators.runge_kutta._step_rate` does: ``z`` the larger of the
+    translation's (the geometric mean of the position's and the momentum's, which multiply to
+    ``z^2`` for an oscillator of any phase) and the body-axes angular momentum's; ``s`` the
+    quaternion's, ``h |omega| / 2`` whatever the phase.
+    """
+    position = _squared_ratio(first, second, i, 0, 3)
+    momentum = _squared_ratio(first, second, i, 7, 10)
+    if position > 0.0 and momentum > 0.0:
+        translation = math.sqrt(position * momentum)
+    else:
+        translation = max(position, momentum)
+    angular = _squared_ratio(first, second, i, 10, 13)
+    return (math.sqrt(max(translation, angular)) * over_a21,
+            math.sqrt(_squared_ratio(first, second, i, 3, 7)) * over_a21)
 
 
 class StepsCapped(ArithmeticError):

@@ -213,17 +213,6 @@ def feedback_rate(model, i, big_l, h):
     return h * math.sqrt(kin.dot(big_l, big_l)) / model.moments[i, 0]
 
 
-@kernel
-def step_rates(first, second, over_a21, out):
-    """Each body's :func:`_step_rate` from its first two slopes (N, 13 each), into ``out`` (N,).
-
-    For a stepper outside the compiled kernels (dopri5's), whose stages are arrays.
-    """
-    for i in range(first.shape[0]):
-        out[i] = _step_rate(kin.body_state(first, i), kin.body_state(second, i), over_a21)
-    return out
-
-
 @helper
 def _own_error(difference, rate_weight, rate):
     """Return the method's own error from the embedded difference (:class:`Tableau`).
