@@ -25,12 +25,10 @@ X0, V0 = np.array([0.4, -0.1, 0.2]), np.array([0.3, 0.5, -0.2])   # m, m/s
 TOP = np.diag([0.5, 0.5, 0.2])    # kg m^2: symmetric about body z
 TOP_TURN = Rotation.from_rotvec([0.3, -0.2, 0.5])
 TOP_SPIN = np.array([1.0, -2.0, 6.0])   # rad/s, body axes
-# Estimates that are another method's error, which bounds this one's: dopri5's and rk4_world's
-# embedded lower-order method; the Yoshida composition of DLM compares each of its three
-# sub-drifts, whose leading errors cancel in the composition but not in the comparison.
-# Their ratios are in docs/accuracy.md.
-UPPER_BOUNDS = {('top', 'dlm4'), ('spring', 'dopri5'), ('top', 'dopri5'), ('spring', 'rk4_world'),
-                ('top', 'rk4_world')}
+# Estimates that bound the error from above only: the Yoshida composition of DLM compares
+# each of its three sub-drifts, whose leading errors cancel in the composition but not in
+# the comparison. Their ratios are in docs/accuracy.md.
+UPPER_BOUNDS = {('top', 'dlm4')}
 
 
 def oscillator(name, error_control=False, tolerance=1e-6):
@@ -265,13 +263,16 @@ FLOOR = 1e-13   # scaled error below which estimate and truth are both round-off
 # truth. A diverging bare method reaches them (euler on the rod: estimate 0.32, truth 6.6e-4).
 ASYMPTOTIC = 1e-3
 # An estimate measured beyond 10x above the truth, with the factor it stays within
-# (docs/accuracy.md, "Error estimates"): rk4's rate-scaled difference under the damped spring
-# (10.4 to 11.7x).
-OUTSIDE_BAND = {('rk4', 'pushed_damped'): 15.0}
+# (docs/accuracy.md, "Error estimates"): rk4's and rk4_world's rate-scaled difference under
+# the damped spring (10.4 to 11.7x; rk4_world 10.8x); dopri5's on the rod's first step (34x):
+# its first internal steps see the body-axes L's coupling through I_min = 1e-4 (z = 1e4 to
+# 4e3 from the stages), where the leading term says nothing and the difference is kept whole.
+OUTSIDE_BAND = {('rk4', 'pushed_damped'): 15.0, ('rk4_world', 'pushed_damped'): 15.0,
+                ('dopri5', 'rod'): 50.0}
 # The largest true error a method that declares what its estimate omits (``estimate_omits``:
-# the exact flow's round-off) may show beyond its estimate: 7e-10 and 1.4e-9 measured on the
-# rod, a factor 1.5 of room.
-OMITTED = 2e-9
+# the exact flow's round-off) may show beyond its estimate: 3.6e-11 measured over 100 steps
+# of the rod (the same against a 40-digit Taylor solution), a factor 1.4 of room.
+OMITTED = 5e-11
 
 
 def oracle_pairs(key, name):
@@ -351,9 +352,8 @@ def test_dopri5_meets_its_tolerance_on_the_rod_or_says_so():
 
     The estimate of a step sums those of its internal steps; a step whose sum exceeds
     ``tolerance`` must be given up or carry a capped reason. On the rod (error control at
-    1e-6, steps of 0.01 s) the oracle's local error is above round-off and never beyond ten
-    times the estimate; the estimate, the fourth-order solution's error while the fifth is
-    kept, may be far above it only because the method declares it a bound.
+    1e-6, steps of 0.01 s) the oracle's local error is above round-off and within [0.1, 10]
+    of the estimate, or of the factor the rod's spin takes it beyond (OUTSIDE_BAND).
     """
     case = estimate_cases.CASES['rod']
     dt = 10 * case.dt
@@ -373,8 +373,7 @@ def test_dopri5_meets_its_tolerance_on_the_rod_or_says_so():
     assert taken == ADAPTIVE_STEPS - world.diagnostics.failed_steps
     assert taken >= ADAPTIVE_STEPS // 2   # not met by giving every step up
     assert unflagged_over == 0, (unflagged_over, taken)
-    bounds = REGISTRY['dopri5'].estimate_bounds
+    above = OUTSIDE_BAND['dopri5', 'rod']
     for estimate, true in checked:
         assert true > FLOOR, (estimate, true)
-        assert estimate >= 0.1 * true, (estimate, true)
-        assert bounds or estimate <= 10.0 * true, (estimate, true)
+        assert 0.1 * true <= estimate <= above * true, (estimate, true)

@@ -7,8 +7,17 @@ each body's own size, mass and inertia, so a microgram body is held to the same 
 accuracy as a kilogram one (an absolute tolerance would swamp the first and starve the
 second). The right-hand side is one compiled call. The error estimate of every internal step
 (the difference of the embedded fourth-order solution, which scipy's stepper computes to
-control the step) is reported per body in the units of :mod:`rigid_sim.core.error_estimate`,
-summed over the internal steps of a call.
+control the step) is the fourth-order solution's error, while the fifth-order one is kept:
+on ``y' = lambda y`` the difference is ``97 z^5 / 120000`` and the kept solution's error
+``-z^6 / 3600 + z^7 / 5040`` (``z = h lambda``; from scipy's tableau), so the kept error is
+``100 / 291 z`` times the difference. A spin turns the quaternion with ``lambda = i w / 2``:
+there the ``z^6`` term only changes its length, which the step's normalisation takes away,
+and the turn that is left, ``(1/5040 + 1/3600) |z|^7``, is ``0.589 |z|^2`` times the
+difference. As for ``rk4`` (:class:`~rigid_sim.core.integrators.runge_kutta.Tableau`), the
+rates are what the first two stages measure, per body (:func:`_part_rates`): the estimate is
+the difference times ``min(1, 100 z / 291 + 0.589 s^2)``, ``z`` the rate of the position,
+momentum and body-axes angular momentum, ``s`` the quaternion's. It is reported per body in
+the units of :mod:`rigid_sim.core.error_estimate`, summed over the internal steps of a call.
 
 That sum is what a step reports, so it is what is held to ``tolerance``: each internal step
 of length ``h`` in a step of ``dt`` must keep its estimate, the largest over the components
@@ -23,11 +32,13 @@ interrupt. The internal steps of one call are capped (:data:`MAX_INTERNAL_STEPS`
 a large world: :data:`INTERNAL_WORK` body-steps): past the cap the call gives up with
 :class:`StepsCapped`, the state kept, and says so.
 """
+import math
+
 import numpy as np
 
 from rigid_sim.core import kinematics as kin
 from rigid_sim.core import safeguards
-from rigid_sim.core.compiled import kernel
+from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.effects.base import accumulate
 from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
@@ -43,25 +54,95 @@ MAX_INTERNAL_STEPS = 50
 # Body-steps (internal steps times bodies) one call may take at most: the same bound where
 # the compiled right-hand side, not the stepper, is most of the cost.
 INTERNAL_WORK = 10_000
+# The kept fifth-order solution's error over the embedded difference, per unit z = h lambda,
+# and for a spin per unit s^2 (module docstring; scipy's RK45 tableau on y' = lambda y).
+RATE_WEIGHT = 100.0 / 291.0
+SPIN_WEIGHT = (1.0 / 5040.0 + 1.0 / 3600.0) / (97.0 / 120000.0)
 
 
 def per_unit_step(stepper):
     """Return scipy's ``stepper`` class with the error test this module holds a step to.
 
-    Its step is accepted when ``max |error_k| / allowed_k < |h|``: ``allowed`` (per component,
-    set on the instance before its first step) is the error a step may make per second. Only
-    the norm is replaced (scipy's ``_estimate_error_norm``, the method its step-size control
-    calls); scipy still chooses, rejects and grows the steps.
+    Its step is accepted when its estimate (:func:`own_errors`, the largest over the bodies)
+    is below ``per_second |h|``, the scaled error a step may make per second; ``scale``
+    (N, 13) and ``per_second`` are set on the instance before its first step, and
+    ``body_error`` (N,) holds the estimate of the step last tried, the one kept once ``step``
+    returns. Only the norm is replaced (scipy's ``_estimate_error_norm``, the method its
+    step-size control calls); scipy still chooses, rejects and grows the steps.
     """
     # A private method (unchanged since scipy 1.0): should it change, the estimates' test of
     # dopri5 on the thin rod finds steps kept above their tolerance.
     class PerUnitStep(stepper):
-        allowed = None   # (n,) error per second of step, the reported unit over its scale
+        scale = None        # (N, 13) each component's scale (rigid_sim.core.error_estimate)
+        per_second = None   # scaled error a step may make per second of it
+        body_error = None   # (N,) the last step's estimate, scaled
 
         def _estimate_error_norm(self, K, h, scale):
-            return np.max(np.abs(self._estimate_error(K, h)) / self.allowed) / abs(h)
+            self.body_error = own_errors(self._estimate_error(K, h), K, self.scale,
+                                         1.0 / self.A[1, 0])
+            return self.body_error.max() / self.per_second / abs(h)
 
     return PerUnitStep
+
+
+def own_errors(difference, stages, scale, over_a21):
+    """(N,) scaled error of the kept solution of one step, from the embedded ``difference``.
+
+    ``difference`` (N * 13,) is the pair's difference, ``stages`` the step's slopes (S, N * 13),
+    ``scale`` (N, 13). Each body's largest scaled component of the difference, times
+    ``min(1, RATE_WEIGHT z + SPIN_WEIGHT s^2)`` with its rates (:func:`_part_rates`); none
+    measured (both 0) or not finite: the difference itself, which bounds the error.
+    """
+    shape = scale.shape
+    return _own_errors(difference.reshape(shape), stages[0].reshape(shape),
+                       stages[1].reshape(shape), scale, over_a21, np.empty(shape[0]))
+
+
+@kernel
+def _own_errors(difference, first, second, scale, over_a21, out):
+    """:func:`own_errors` on (N, 13) arrays, into ``out`` (N,)."""
+    for i in range(scale.shape[0]):
+        size = 0.0
+        for k in range(13):
+            size = max(size, abs(difference[i, k]) / scale[i, k])
+        z, s = _part_rates(first, second, i, over_a21)
+        factor = RATE_WEIGHT * z + SPIN_WEIGHT * s * s
+        out[i] = size * (min(1.0, factor) if 0.0 < factor < math.inf else 1.0)
+    return out
+
+
+@helper
+def _squared_ratio(first, second, i, begin, end):
+    """``|k2 - k1|^2 / |k1|^2`` over components ``begin:end`` of row ``i`` (0 if unmoved)."""
+    moved, size = 0.0, 0.0
+    for k in range(begin, end):
+        moved += (second[i, k] - first[i, k]) ** 2
+        size += first[i, k] ** 2
+    if moved == 0.0:
+        return 0.0
+    return moved / size if size > 0.0 else math.inf
+
+
+@helper
+def _part_rates(first, second, i, over_a21):
+    """Rates ``z`` and ``s`` of body ``i``'s step from its first two slopes (N, 13 each).
+
+    ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h`` times the local rate
+    (Hairer and Wanner's stiffness detection), taken apart for each part of the state, as
+    :func:`rigid_sim.core.integrators.runge_kutta._step_rate` does: ``z`` the larger of the
+    translation's (the geometric mean of the position's and the momentum's, which multiply to
+    ``z^2`` for an oscillator of any phase) and the body-axes angular momentum's; ``s`` the
+    quaternion's, ``h |omega| / 2`` whatever the phase.
+    """
+    position = _squared_ratio(first, second, i, 0, 3)
+    momentum = _squared_ratio(first, second, i, 7, 10)
+    if position > 0.0 and momentum > 0.0:
+        translation = math.sqrt(position * momentum)
+    else:
+        translation = max(position, momentum)
+    angular = _squared_ratio(first, second, i, 10, 13)
+    return (math.sqrt(max(translation, angular)) * over_a21,
+            math.sqrt(_squared_ratio(first, second, i, 3, 7)) * over_a21)
 
 
 class StepsCapped(ArithmeticError):
@@ -132,8 +213,7 @@ class Dopri5(Integrator):
     order = 5
     adaptive = True
     bound = safeguards.UNBOUNDED   # its error control chooses the internal steps
-    estimate_order = 4             # the embedded fourth-order solution's error, h^5
-    estimate_bounds = True         # of the fourth-order solution: the fifth is kept
+    estimate_order = 5             # the embedded difference times z: h^6
     evaluations_per_step = 0       # counted as they happen
 
     def __init__(self, system, tolerance=1e-6):
@@ -184,7 +264,7 @@ class Dopri5(Integrator):
                                atol=self.tolerance * scale.ravel(),
                                first_step=min(self._step_size or dt, end - time))
         # The error test (rtol and atol above only feed scipy's own norm, which it replaces).
-        solver.allowed = self.tolerance / span * scale.ravel()
+        solver.scale, solver.per_second = scale, self.tolerance / span
         while solver.status == 'running':
             if self._left == 0:
                 self._step_size = solver.h_abs   # where the next call starts again
@@ -197,10 +277,7 @@ class Dopri5(Integrator):
             message = solver.step()
             if solver.status == 'failed':
                 raise FloatingPointError(f'dopri5 failed: {message}')
-            # The embedded pair's difference, as the stepper forms it (K: its stages, E: the
-            # weights of their difference), per body in scaled units.
-            difference = (solver.h_previous * (solver.K.T @ solver.E)).reshape(shape)
-            self.error += np.max(np.abs(difference) / scale, axis=1)
+            self.error += solver.body_error   # of the step kept
         # The step the error estimate proposes next, not the last one cut short by `end`.
         self._step_size = solver.h_abs
         from_body_axes(np.ascontiguousarray(solver.y.reshape(shape)), y)
