@@ -78,7 +78,8 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
 TURN_STARTS = 6
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the deflated solves.
+# other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
+# deflated solves.
 # The node decides by it whether a goal is solved in the tick.
 WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
                      + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
