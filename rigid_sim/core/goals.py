@@ -70,13 +70,20 @@ DEFLATED_STARTS = 2
 # succeed, and a stage halves at most log2(CONTINUATION_STAGE / SMALLEST_STAGE) + 1 times.
 CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
                       + int(np.log2(CONTINUATION_STAGE / SMALLEST_STAGE)) + 1)
+# Starts a whole turn from the corrected current motion (about each of the axes of
+# ``problem.whole_turns``, both ways) tried, BRANCH_ITERATIONS each, after the current
+# motion fails and before the seeded draws: over a long flight the phase of the spin
+# winds several turns, the targets' spread spans neighbouring branches, and the corrected
+# start may sit by a fold of the branch next to the target's (tumbling, T = 10 s).
+TURN_STARTS = 6
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# other starts (:func:`_starts`), the branches of whole turns and the deflated solves.
+# other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
+# deflated solves.
 # The node decides by it whether a goal is solved in the tick.
 WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
                      + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
-                                            + DEFLATED_STARTS))
+                                            + DEFLATED_STARTS + TURN_STARTS))
 
 
 @dataclass(frozen=True)
@@ -161,16 +168,16 @@ def _coarse_to_fine(problem, newton, bound=None, iterations=MAX_ITERATIONS):
     newton.converge(TOLERANCE, bound, iterations)
 
 
-def _starts(problem, first):
-    """Return the starts of the first solve: ``first``, the current motion, seeded draws.
+def _turned(problem, first):
+    """Return up to TURN_STARTS starts a whole turn from ``first``, nearest first."""
+    turned = [first + shift for shift in problem.whole_turns(first, first)]
+    return sorted(turned, key=problem.distance)[:TURN_STARTS]
 
-    A start that ends in a local minimum of the residual is followed by the current motion
-    as it is, then RESTARTS draws around the corrected one (seeded, so a goal solved twice
-    is solved alike).
-    """
+
+def _draws(problem, first):
+    """Return RESTARTS starts drawn around ``first`` (seeded: a goal solves alike twice)."""
     draws = np.random.default_rng(RESTART_SEED).standard_normal((RESTARTS, first.size))
-    return [(first, None), (problem.current, None)] + [
-        (first + RESTART_SPREAD * draw / problem.scale, None) for draw in draws]
+    return [first + RESTART_SPREAD * draw / problem.scale for draw in draws]
 
 
 def _near_any(problem, values, others):
@@ -284,7 +291,7 @@ class GoalSolver:
 
         The first solutions come from the continuation of the current motion
         (:meth:`_continued`, twist and angular unknowns) and from the corrected current
-        motion, the nearer taken (the other starts, :func:`_starts`, if neither converges).
+        motion, the nearer taken (the other starts, :meth:`_restarted`, if neither converges).
         Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
@@ -300,12 +307,7 @@ class GoalSolver:
             except NoConvergence:
                 pass
         if not found:
-            starts = _starts(problem, first)[1:]
-            try:
-                found = [self._converged(problem, starts)]
-            except NoConvergence as error:
-                tried = len(starts) + 1 + (problem.goal.unknowns in CONTINUED)
-                raise NoConvergence(_unconverged(tried, error)) from None
+            found = [self._restarted(problem, first)]
         best = min(found, key=lambda newton: problem.distance(newton.values))
         nearest = problem.distance(best.values)
         seen = [newton.values for newton in found] + [first]
@@ -338,6 +340,29 @@ class GoalSolver:
         if problem.exact and problem.goal.unknowns in CONTINUED:
             best = self._deflated(problem, best, (problem.current, first))
         return best
+
+    def _restarted(self, problem, first):
+        """Newton from the other starts, after the first solves found nothing.
+
+        The current motion as it is, then the starts a whole turn from ``first``
+        (:func:`_turned`, BRANCH_ITERATIONS each), then seeded draws around it: a start
+        that ends in a local minimum of the residual is followed by the next, which may
+        lie in another basin.
+        """
+        tries = [([problem.current], MAX_ITERATIONS),
+                 (_turned(problem, first), BRANCH_ITERATIONS),
+                 (_draws(problem, first), MAX_ITERATIONS)]
+        tried = 1 + (problem.goal.unknowns in CONTINUED)
+        for starts, iterations in tries:
+            if not starts:   # linear unknowns have no whole turns
+                continue
+            tried += len(starts)
+            try:
+                return self._converged(problem, [(s, None) for s in starts],
+                                       iterations=iterations)
+            except NoConvergence as error:
+                last = error
+        raise NoConvergence(_unconverged(tried, last)) from None
 
     @staticmethod
     def _deflated(problem, best, starts):
