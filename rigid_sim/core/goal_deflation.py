@@ -44,8 +44,13 @@ class Deflated:
         return factor
 
     def residuals(self, values):
-        """Residuals (K, m) of unknowns (K, n), deflated; NaN rows for failed flights."""
-        return self.problem.residuals(values) * self.factor(values)[:, None]
+        """Residuals (K, m) of unknowns (K, n), deflated; NaN rows for failed flights.
+
+        At a known root itself (0 times an unbounded factor) the row is NaN too: Newton
+        treats it as a failed flight, which keeps it off the root deflation takes out.
+        """
+        with np.errstate(invalid='ignore'):
+            return self.problem.residuals(values) * self.factor(values)[:, None]
 
     def close_enough(self, residual, tolerance):
         """Whether the deflated ``residual`` is within ``tolerance``: then the true one is."""
