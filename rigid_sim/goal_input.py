@@ -14,8 +14,8 @@ on ``~/<body>/goal_path`` (nav_msgs/Path) and the outcome, or the reason for a r
 A solve is Newton's method over flights of the world, from many starts: its work
 is the body-steps of one flight (steps times bodies) times the flights it may take, which
 no step count bounds. With a wall clock a goal is solved in the tick only where that worst
-case stays under ``INLINE_WORK`` (or the flight is free under the exact flow, exact at any
-step); the rest run in a worker thread on a snapshot of the world taken at the tick, so
+case stays under ``INLINE_WORK``; the rest run in a worker thread on a snapshot of the world
+taken at the tick, so
 that a goal never holds up /clock or control. The world has moved on by the time the answer
 comes, so it is re-anchored at the tick that applies it: solved again from the world as it
 is then, from the worker's solution and Jacobian only (no restarts), which takes a few
@@ -42,7 +42,7 @@ from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
 
 from rigid_sim import conversions
-from rigid_sim.core.goal_flight import free_under_exact_flow, snapshot
+from rigid_sim.core.goal_flight import snapshot
 from rigid_sim.core.goals import Goal, GoalSolver, WORST_FLIGHTS
 from rigid_sim.core.text import shown
 from rigid_sim.qos_overrides import QUEUE_DEPTH
@@ -208,12 +208,13 @@ class GoalInput:
         return steps * self._world.bodies.count
 
     def _in_tick(self, goal, settings):
-        world = self._world
+        # A free flight under the exact flow is one step, but not a cheap solve: the search
+        # for the nearest solution (continuation, branches of whole turns, deflation) takes a
+        # median 20 ms of Python, and a flood of random goals held parameter calls 173 ms at
+        # p99 when such solves ran in the tick (docs/goals.md). It goes to the worker too.
         loop = getattr(self._node, 'loop', None)
         return (settings.rate == 0.0 or getattr(loop, 'stopped', True)
-                or self._flight_work(goal, settings) * WORST_FLIGHTS <= INLINE_WORK
-                or goal.unknowns != 'wrench'
-                and free_under_exact_flow(world, goal.body, world.inputs))
+                or self._flight_work(goal, settings) * WORST_FLIGHTS <= INLINE_WORK)
 
     def _finish(self, settings, number, goal, outcome, world, chases):
         if world is not self._world or self._latest.get(goal.body) != number:
