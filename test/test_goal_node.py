@@ -151,7 +151,6 @@ def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim
     assert physics_cases.rotation_error(orientation, TURN.as_quat()) < 1e-6
 
 
-
 FREE_SCENE = """
 bodies:
   - {name: box, shape: {type: box, size: [0.2, 0.3, 0.4]}, mass: 2.0,
@@ -180,6 +179,7 @@ def test_with_a_wall_clock_an_exact_free_flight_is_solved_in_the_worker_thread(r
     position, orientation = user.pose_at(2.0)
     assert np.linalg.norm(position - TARGET) < 1e-6
     assert physics_cases.rotation_error(orientation, TURN.as_quat()) < 1e-6
+
 
 BALL_SCENE = """
 effects:
