@@ -132,10 +132,8 @@ def test_the_kit_solves_a_goal_and_the_body_gets_there(rigid_sim):
         sim.solve('box', (TARGET, TURN.as_quat()), at=0.5)
 
 
-def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim, monkeypatch):
-    """With a wall clock a long solve runs in a thread; ticks go on meanwhile."""
-    monkeypatch.setattr(goal_input, 'WORST_FLIGHTS', 10 ** 9)
-    sim = rigid_sim(yaml=SCENE, time_step=DT)
+def reached_through_the_worker(sim):
+    """Send ``sim``'s box the goal with a wall clock: solved in the thread, then reached."""
     sim.node.loop.stopped = False   # as if a wall clock ticked it: solves go to the thread
     user = User(sim)
     user.goal(at=2.0)
@@ -149,6 +147,12 @@ def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim
     position, orientation = user.pose_at(2.0)
     assert np.linalg.norm(position - TARGET) < 1e-6
     assert physics_cases.rotation_error(orientation, TURN.as_quat()) < 1e-6
+
+
+def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim, monkeypatch):
+    """With a wall clock a long solve runs in a thread; ticks go on meanwhile."""
+    monkeypatch.setattr(goal_input, 'WORST_FLIGHTS', 10 ** 9)
+    reached_through_the_worker(rigid_sim(yaml=SCENE, time_step=DT))
 
 
 FREE_SCENE = """
@@ -165,20 +169,7 @@ def test_with_a_wall_clock_an_exact_free_flight_is_solved_in_the_worker_thread(r
     such goals held parameter calls for 173 ms at p99 (docs/goals.md). With a wall clock it
     goes to the worker and is re-anchored, and the box is at the goal at the stamped time.
     """
-    sim = rigid_sim(yaml=FREE_SCENE, time_step=DT)
-    sim.node.loop.stopped = False   # as if a wall clock ticked it
-    user = User(sim)
-    user.goal(at=2.0)
-    sim.step(1)
-    while sim.node.goals.solved == 0:
-        assert sim.time < 1.0, 'the worker thread did not answer'
-        time.sleep(0.005)
-        sim.step(1)
-    assert values(user.statuses[-1])['solved in'].startswith('worker thread')
-    sim.step(round((2.0 - sim.time) / DT))
-    position, orientation = user.pose_at(2.0)
-    assert np.linalg.norm(position - TARGET) < 1e-6
-    assert physics_cases.rotation_error(orientation, TURN.as_quat()) < 1e-6
+    reached_through_the_worker(rigid_sim(yaml=FREE_SCENE, time_step=DT))
 
 
 BALL_SCENE = """
