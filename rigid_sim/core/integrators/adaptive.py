@@ -44,6 +44,7 @@ from rigid_sim.core.error_estimate import state_scales
 from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, set_stage, slope_of,
                                                        to_internal, to_public)
+from rigid_sim.core.integrators.runge_kutta import squared_part_rates
 from rigid_sim.core.kinematics import check_substep
 
 # Internal steps one call may take at most: scipy's stepper costs 0.2 ms a step for a few
@@ -112,37 +113,19 @@ def _own_errors(difference, first, second, scale, over_a21, out):
 
 
 @helper
-def _squared_ratio(first, second, i, begin, end):
-    """``|k2 - k1|^2 / |k1|^2`` over components ``begin:end`` of row ``i`` (0 if unmoved)."""
-    moved, size = 0.0, 0.0
-    for k in range(begin, end):
-        moved += (second[i, k] - first[i, k]) ** 2
-        size += first[i, k] ** 2
-    if moved == 0.0:
-        return 0.0
-    return moved / size if size > 0.0 else math.inf
-
-
-@helper
 def _part_rates(first, second, i, over_a21):
     """Rates ``z`` and ``s`` of body ``i``'s step from its first two slopes (N, 13 each).
 
     ``Y2 - Y1 = a21 h k1``, so ``|k2 - k1| / (a21 |k1|)`` is ``h`` times the local rate
-    (Hairer and Wanner's stiffness detection), taken apart for each part of the state, as
-    :func:`rigid_sim.core.integrators.runge_kutta._step_rate` does: ``z`` the larger of the
-    translation's (the geometric mean of the position's and the momentum's, which multiply to
-    ``z^2`` for an oscillator of any phase) and the body-axes angular momentum's; ``s`` the
-    quaternion's, ``h |omega| / 2`` whatever the phase.
+    (Hairer and Wanner's stiffness detection), taken apart for each part of the state by
+    :func:`~rigid_sim.core.integrators.runge_kutta.squared_part_rates`: ``z`` the larger of
+    the translation's (the geometric mean of the position's and the momentum's, which
+    multiply to ``z^2`` for an oscillator of any phase) and the body-axes angular
+    momentum's; ``s`` the quaternion's, ``h |omega| / 2`` whatever the phase.
     """
-    position = _squared_ratio(first, second, i, 0, 3)
-    momentum = _squared_ratio(first, second, i, 7, 10)
-    if position > 0.0 and momentum > 0.0:
-        translation = math.sqrt(position * momentum)
-    else:
-        translation = max(position, momentum)
-    angular = _squared_ratio(first, second, i, 10, 13)
-    return (math.sqrt(max(translation, angular)) * over_a21,
-            math.sqrt(_squared_ratio(first, second, i, 3, 7)) * over_a21)
+    translation, turn, angular = squared_part_rates(kin.body_state(first, i),
+                                                    kin.body_state(second, i))
+    return math.sqrt(max(translation, angular)) * over_a21, math.sqrt(turn) * over_a21
 
 
 class StepsCapped(ArithmeticError):

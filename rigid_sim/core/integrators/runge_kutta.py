@@ -190,6 +190,19 @@ def _step_rate(first, second, over_a21):
     angular momentum at its own rate; the larger. The larger of translation and rotation.
     Squared ratios throughout: two square roots in all.
     """
+    translation, turn, angular = squared_part_rates(first, second)
+    rate = math.sqrt(max(translation, max(turn, angular))) * over_a21
+    return rate if math.isfinite(rate) else 0.0
+
+
+@helper(inline='always')
+def squared_part_rates(first, second):
+    """``(h rho a21)^2`` of translation, quaternion and angular momentum (:func:`_step_rate`).
+
+    From a step's first two slopes ``k1``, ``k2`` (slope tuples): ``|k2 - k1|^2 / |k1|^2`` of
+    each part, the translation's the geometric mean of the position's and the momentum's
+    (the one that changes, when the other keeps still).
+    """
     change = _plus_slope(second, -1.0, first)
     position = _squared_ratio(change[0], first[0])
     momentum = _squared_ratio(change[2], first[2])
@@ -197,9 +210,8 @@ def _step_rate(first, second, over_a21):
         translation = math.sqrt(position * momentum)
     else:
         translation = max(position, momentum)
-    rotation = max(_squared_ratio(change[1], first[1]), _squared_ratio(change[3], first[3]))
-    rate = math.sqrt(max(translation, rotation)) * over_a21
-    return rate if math.isfinite(rate) else 0.0
+    return (translation, _squared_ratio(change[1], first[1]),
+            _squared_ratio(change[3], first[3]))
 
 
 @helper
