@@ -6,17 +6,25 @@ SIGINT and SIGTERM stop the node cleanly (exit status 0, no traceback) at any mo
 own handlers are not installed: they shut the context down from the signal while a tick may
 still be publishing, which then raises ("publisher's context is invalid"). Here a signal
 while the node is built (its scene loaded, its kernels compiled or loaded from numba's
-cache) ends the process at once: nothing it holds then needs an orderly release, and an
-exception raised out of that code would unwind through llvmlite's callbacks, which cannot
-pass it on and may crash on what it left half-built. Once the node spins, a signal only
-asks the loop to stop, so the callback running (a tick, mid-way) ends normally, and then the
-executor is left, the node destroyed and the context shut down in that order, by this
+cache) destroys the node and ends the process at once: nothing else it holds needs an
+orderly release, and an exception raised out of that code would unwind through llvmlite's
+callbacks, which cannot pass it on and may crash on what it left half-built. Once the
+kernels are ready, a signal only asks to stop: the node's topics and services are made
+(tens of ms), and once it spins the callback running (a tick, mid-way) ends normally; then
+the executor is left, the node destroyed and the context shut down in that order, by this
 thread alone.
+
+The node is always destroyed before the process ends. Its DDS participant lives as long as
+the process's last node, and a participant thread killed mid-send holds, for good, the lock
+of another process's shared-memory port, so that every node that then sends there hangs
+(docs/ros_notes.md, "Shutdown"). The node cannot be destroyed while it makes a topic or a
+service (rclpy defers it), which is why a signal then only asks.
 """
 import atexit
 import os
 import signal
 import sys
+import time
 
 # Only the standard library above: the handlers are installed before the heavy imports
 # (rclpy, numba, scipy: about a second), so a signal in the first milliseconds is not lost.
@@ -24,16 +32,39 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class _Stopper:
-    """The stop signals' handler: end the process before the node spins, ask the loop after."""
+    """The stop signals' handler: end the process until the kernels are ready, then ask.
+
+    Told by the node when it exists in the middleware and when its kernels are ready.
+    """
 
     def __init__(self):
-        self.spinning = False
+        self.started = time.monotonic()
+        self.at_once = True
         self.requested = False
+        self._node = None
 
     def __call__(self, signum, frame):
         self.requested = True
-        if not self.spinning:
+        if self.at_once:
+            self.release_node()
             _end_process(0)
+
+    def exists(self, node):
+        """Hold ``node``, which the middleware knows from now on, to destroy it at a stop."""
+        self._node = node
+
+    def compiled(self):
+        """From now on a stop signal only asks: the node makes its topics and services."""
+        self.at_once = False
+
+    def release_node(self):
+        """Destroy the node held, half-built as it may be, so that no DDS thread outlives it."""
+        node, self._node = self._node, None
+        if node is not None:
+            try:
+                node.destroy_node()
+            except Exception:  # noqa: B902  half-built: what it could not release ends anyway
+                pass
 
 
 def ignore_stop_signals():

@@ -114,6 +114,10 @@ class RigidSimNode(Node):
 
     Parameters
     ----------
+    start : optional
+        Told ``start.exists(node)`` as soon as the node exists in the middleware, before the
+        scene is loaded, and ``start.compiled()`` once its kernels are ready, before its
+        topics and services are made (the executable's stop signal, :mod:`rigid_sim.main`).
     **kwargs
         Passed to :class:`rclpy.node.Node` (``context``, ``cli_args``,
         ``parameter_overrides``, ...).
@@ -124,8 +128,10 @@ class RigidSimNode(Node):
         When a parameter value or the scene is refused at start.
     """
 
-    def __init__(self, **kwargs):
+    def __init__(self, start=None, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
+        if start is not None:
+            start.exists(self)
         self.settings = parameters.declare(self)
         self.scene, self.world = load(self.settings)
         self.get_logger().info(self._describe(self.settings.start_paused))
@@ -133,6 +139,8 @@ class RigidSimNode(Node):
         # Before any topic or service exists: once a client discovers one, the node answers.
         self.compiled = warm_up(self.world, self.settings.integrator, self.get_logger(),
                                 imus=scene_imus(self.scene, self.world))
+        if start is not None:
+            start.compiled()
         self.ticks = 0
         self._ticking = None   # the TickInProgress the loop left part-done, if any
         self.qos_overrides = QosOverrides(self)
@@ -155,6 +163,16 @@ class RigidSimNode(Node):
         self.reconfiguration = Reconfiguration(self)
         self._warn_on_slow_ticks_for_imus()
         self.sim_interfaces = sim_interfaces.serve(self)   # None without the package
+
+    def destroy_node(self):
+        """Destroy the node and its action server, which rclpy's ``destroy_node`` leaves.
+
+        A live action server keeps the node, and with it the process's DDS participant, in
+        the middleware after the node is destroyed (docs/ros_notes.md, "Shutdown").
+        """
+        for waitable in list(self.waitables):
+            waitable.destroy()
+        super().destroy_node()
 
     @property
     def paused(self):

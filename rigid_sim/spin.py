@@ -6,6 +6,7 @@
 which brings in rclpy, numba and scipy.
 """
 import sys
+import time
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
@@ -34,19 +35,21 @@ def run(stopper):
     Parameters
     ----------
     stopper : rigid_sim.main._Stopper
-        Set by the stop signals; told when the node spins.
+        Set by the stop signals; told when the node exists and when its kernels are ready.
     """
     try:
-        node = RigidSimNode()
+        node = RigidSimNode(start=stopper)
     except (ParameterError, SceneError, FileNotFoundError) as error:
         rclpy.logging.get_logger(NODE_NAME).error(f'refused to start: {error}')
+        stopper.release_node()
         return 1
     freeze_long_lived_objects()   # no full garbage collection stalls a tick from here on
     node.owner.keeps_heap_frozen = True   # nor one over what a scene edit builds
     sys.setswitchinterval(SWITCH_INTERVAL)
     executor = make_executor()
     executor.add_node(node)
-    stopper.spinning = True
+    node.get_logger().info(f'ready {time.monotonic() - stopper.started:.1f} s after the start: '
+                           'answering services, parameters and topics')
     try:
         while not stopper.requested:
             executor.spin_once(timeout_sec=SIGNAL_LATENCY)

@@ -4,7 +4,7 @@
 
 Twenty node processes at every kind of tick rate (1 kHz, 100 Hz, as fast as possible, one
 tick per 1000 s) and paused, each signalled once at a different moment after it reported
-that it simulates (so mostly mid-tick at the fast rates): each must exit with status 0 and
+that it is ready (so mostly mid-tick at the fast rates): each must exit with status 0 and
 print no traceback and no rclpy error, and so must a node signalled while it compiles its
 kernels. The twenty processes are forked from one that imported the package once
 (``node_forks.py``), each then running the executable's ``main`` as the console script
@@ -45,7 +45,7 @@ def test_twenty_signals_each_end_a_node_with_status_zero_and_no_traceback(tmp_pa
         logs = [tmp_path / f'node{i}.log' for i in range(len(RUNS))]
         deadline = time.monotonic() + START_TIMEOUT
         for pid, log, (rate, number, delay) in zip(pids, logs, RUNS):
-            while not (log.exists() and 'simulating' in log.read_text()):
+            while not (log.exists() and 'ready' in log.read_text()):
                 assert time.monotonic() < deadline, f'{rate}: not started\n{log.read_text()}'
                 time.sleep(0.02)
             time.sleep(delay)
@@ -85,3 +85,33 @@ def test_a_signal_while_the_kernels_compile_ends_the_node_with_status_zero(tmp_p
             processes.end(node)
     assert node.returncode == 0, output
     assert not [mark for mark in MARKS if mark in output], output
+
+
+def _participant_threads():
+    """Return the names of this process's DDS participant threads (Fast DDS: ``dds.*``).
+
+    Its shared-memory watchdog (``dds.shm.wdog``) is one per process, not a participant's.
+    """
+    names = [(task / 'comm').read_text().strip() for task in Path('/proc/self/task').iterdir()]
+    return sorted(name for name in names if name.startswith('dds.') and name != 'dds.shm.wdog')
+
+
+def test_a_destroyed_node_leaves_no_dds_participant_running(ros_context):
+    """Destroyed as the executable destroys it, the node takes its participant with it.
+
+    The process ends at once after (``os._exit``): a participant thread still sending then
+    could die holding the lock of another process's shared-memory port, which hangs every node
+    that sends there (docs/ros_notes.md, "Shutdown"). rclpy's ``destroy_node`` leaves the
+    action server, which held the participant alive.
+    """
+    from rigid_sim.executor import make_executor
+    from rigid_sim.node import RigidSimNode
+    before = _participant_threads()
+    node = RigidSimNode(context=ros_context)
+    executor = make_executor(context=ros_context)
+    executor.add_node(node)
+    executor.spin_once(timeout_sec=0.1)
+    assert len(_participant_threads()) > len(before)
+    executor.shutdown(timeout_sec=0)
+    node.destroy_node()
+    assert _participant_threads() == before
