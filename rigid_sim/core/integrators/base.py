@@ -34,9 +34,6 @@ class Integrator:
     name = ''
     order = 0          # global order of accuracy
     adaptive = False   # True: ``tolerance`` controls the error, not ``dt``
-    # True: the estimate is an embedded lower-order method's error, an upper bound that may
-    # exceed the method's own error many times (docs/accuracy.md, "Error estimates").
-    estimate_bounds = False
     # What the estimate leaves out, in words ('' for nothing the tests found): the error it
     # does not see, measured (docs/accuracy.md, "Error estimates").
     estimate_omits = ''
