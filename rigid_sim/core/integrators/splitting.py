@@ -184,6 +184,7 @@ def _drift_body(x, q, p, big_l, inverse_mass, principal, moments, h, drift, esti
         q = kin.multiply(q, kin.conjugate(principal))
     return x, q, big_l, (error_l, error_q)
 
+
 @helper
 def _kick_error(q, inverse_mass, inertia_inv, h, force, torque, force_before, torque_before):
     """Position and angle errors (3-tuples) of a drift of ``h`` between two kicks.
@@ -222,6 +223,7 @@ def _drift(y, model, h, drift, estimate, estimated):
             drifted = (estimate[i, 6], estimate[i, 7], estimate[i, 8], estimate[i, 9])
             kin.store(estimate, i, 6, kin.plus_scaled4(drifted, 1.0, error[1]))
             kin.store(estimate, i, 10, kin.add(kin.vector(estimate, i, 10), error[0]))
+
 
 # Slots of a substep's estimate terms, per body, in the kernel that kicks and drifts all
 # bodies in turn: position (0:3) and angle (3:6) from the kicks, the DLM drift's quaternion
@@ -618,9 +620,10 @@ class YoshidaComposition:
     order = 4
     weights = (YOSHIDA_OUTER, YOSHIDA_INNER, YOSHIDA_OUTER)
     kick_tableau = CLASSICAL_RK4
-    estimate_order = 4
+    estimate_order = 4   # Richardson's difference of an h^5 error: h^5
     estimate_kind = RICHARDSON
     estimate_optional = True
+
 
 class DLM4(YoshidaComposition, DLM):
     """DLM composed by the Yoshida triple jump. Order 4; four wrench evaluations (16 damped).
