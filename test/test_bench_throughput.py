@@ -34,7 +34,8 @@ def test_quick_throughput_reports_every_integrator(tmp_path, capsys):
     printed = capsys.readouterr().out
     per_body_step = table_rows(printed, 'CPU time per body-step')
     expected = set(REGISTRY) | set(GUARDED) | set(UNESTIMATED) | {'mujoco Euler', 'mujoco RK4'}
-    assert set(UNESTIMATED.values()) == {'euler', 'rk4', 'rk4_world', 'semi_implicit_euler'}
+    assert set(UNESTIMATED.values()) == {'euler', 'rk4', 'rk4_world', 'semi_implicit_euler',
+                                         'dlm4', 'exact_split4'}
     assert set(per_body_step) == expected
     for name, cells in per_body_step.items():
         assert len(cells) == len(QUICK['sizes'])

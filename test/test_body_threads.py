@@ -48,7 +48,7 @@ def test_bodies_on_threads_step_to_the_bits_of_one_call(monkeypatch, name, dampe
     assert shared.integrator.largest_error == one.integrator.error.max() > 0.0
 
 
-@pytest.mark.parametrize('name', ['rk4', 'rk4_world'])
+@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'dlm4'])
 def test_bodies_on_threads_without_estimates_step_to_the_bits_of_one_call(monkeypatch, name):
     """The kernels that skip the estimate share bodies as the others: the same bits, NaN."""
     one, shared = _worlds(monkeypatch, name, True, error_control=False, estimates=False)

@@ -326,13 +326,15 @@ def test_splitting_a_body_at_a_time_reports_the_first_bad_substep(bad, code):
 
 
 @pytest.mark.parametrize('per_body', [True, False])
-@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'euler', 'semi_implicit_euler'])
+@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'euler', 'semi_implicit_euler', 'dlm4',
+                                  'exact_split4'])
 def test_a_step_nobody_estimates_moves_the_bodies_as_an_estimated_one(name, per_body):
     """Without error control and with estimates=False the World steps without the estimate.
 
-    The estimate only reads the stages, so five steps give the very bits of the estimated
-    kernel, in either loop order, and the estimate reads NaN (not estimated), never a
-    number that says "no error".
+    The estimate only reads the stages (Runge-Kutta) or steps again beside the kept step
+    (Richardson, the Yoshida compositions), so five steps give the very bits of the
+    estimated kernel, in either loop order, and the estimate reads NaN (not estimated),
+    never a number that says "no error".
     """
     bodies, y, effects, wrenches = _per_body_scene()
     worlds = [World(bodies, y, effects, name, auto_substep=False, inputs=wrenches,
@@ -350,7 +352,7 @@ def test_a_step_nobody_estimates_moves_the_bodies_as_an_estimated_one(name, per_
 
 
 def test_only_the_methods_with_a_bare_kernel_skip_the_estimate():
-    """Estimates are skipped only where nothing may read them, and only by the four methods.
+    """Estimates are skipped only where nothing may read them, and only by the six methods.
 
     Error control reads them: asking for both is refused. exact_split has no kernel
     without its estimate, so it reports a number either way.

@@ -65,8 +65,11 @@ class Case:
     primary: str          # 'orientation' or 'position': the error the plot shows
     mujoco: bool          # MuJoCo runs it too (see mujoco_baseline)
 
-    def build(self, integrator, tolerance=1e-6):
-        """Return a fresh World running this case with the named integrator."""
+    def build(self, integrator, tolerance=1e-6, estimates=True):
+        """Return a fresh World running this case with the named integrator.
+
+        ``estimates`` False: nothing reads the error estimates (``World(estimates=False)``).
+        """
         bodies = RigidBodies(('body',), np.array([MASS]), np.diag(MOMENTS)[None],
                              np.zeros((1, 3)))
         start, velocity = SPRING_START if self.key == 'spring' else (np.zeros(3), np.zeros(3))
@@ -74,7 +77,8 @@ class Case:
         # The bare method: the benchmark measures each integrator, not the safeguards.
         effects, inputs = self._effects_and_inputs(bodies)
         return World(bodies, y0, effects, integrator=integrator, tolerance=tolerance,
-                     auto_substep=False, inputs=inputs, error_control=False)
+                     auto_substep=False, inputs=inputs, error_control=False,
+                     estimates=estimates)
 
     def _effects_and_inputs(self, bodies):
         """Build the case's effects and its held wrenches (None: no input)."""

@@ -196,19 +196,14 @@ def flag(values):
     return OVER if values.max() > FACTOR else GOOD
 
 
-def ratio_cell(run, bounds=False):
-    """Markdown cell: median [min, max] of the run's ratios, the flag unless good, gaps.
-
-    ``bounds``: the method declares its estimate an upper bound (``estimate_bounds``), so an
-    overestimate reads "over, bound".
-    """
+def ratio_cell(run):
+    """Markdown cell: median [min, max] of the run's ratios, the flag unless good, gaps."""
     values = ratios(run)
     verdict = flag(values)
     cell = ROUND_OFF
     if verdict != ROUND_OFF:
         cell = f'{np.median(values):.2g} [{values.min():.2g}, {values.max():.2g}]'
-        over = f'{cell} over, bound' if bounds else f'{cell} over'
-        cell = {UNDER: f'**{cell} UNDER**', OVER: over, GOOD: cell}[verdict]
+        cell = {UNDER: f'**{cell} UNDER**', OVER: f'{cell} over', GOOD: cell}[verdict]
     return cell + missing(run)
 
 
@@ -347,11 +342,10 @@ def report(bare, control, keys, methods, plot_link, seconds, samples=SAMPLES):
         f'{FLOOR:g} or {ROUND_OFF_ULPS} units in the last place of the position in sizes, '
         'whichever is larger; ticks where both are below it are left out. **UNDER**: some '
         f'tick\'s estimate is more than {FACTOR:g} times below the truth; over: more than '
-        f'{FACTOR:g} times above (", bound": the method declares its estimate an upper bound). '
+        f'{FACTOR:g} times above. '
         f'Reference: DOP853 (rtol {ORACLE_RTOL:g}) from the same '
         'state over the same dt, its wrench the world\'s own effect sum.',
-        matrix(keys, methods,
-               lambda m, k: ratio_cell(bare[m, k], REGISTRY[m].estimate_bounds)),
+        matrix(keys, methods, lambda m, k: ratio_cell(bare[m, k])),
         '### Silent underestimates (worst tick)', underestimates(bare)]
     for tolerance in TOLERANCES:
         parts += [f'### Error control at tolerance {tolerance:g}: largest true error / '

@@ -14,7 +14,8 @@ once, to choose its compiled kernel, and keeps no reference to the system: every
 Every call also estimates its local error per body (:mod:`rigid_sim.core.error_estimate`)
 into ``error``; ``largest_error`` is their largest. Built with ``estimates`` False (nothing
 controls the error or reads it), a method with ``estimate_optional`` (``rk4``,
-``rk4_world``, ``euler``, ``semi_implicit_euler``) runs kernels without that work, and
+``rk4_world``, ``euler``, ``semi_implicit_euler``, ``dlm4``, ``exact_split4``) runs kernels
+without that work, and
 ``error`` and ``largest_error`` read NaN, not estimated; the others estimate anyway. A
 method whose estimate per step shrinks as ``h^(estimate_order + 1)`` declares
 ``estimate_order``, from which the step controller predicts the substeps a tolerance needs.
@@ -33,9 +34,6 @@ class Integrator:
     name = ''
     order = 0          # global order of accuracy
     adaptive = False   # True: ``tolerance`` controls the error, not ``dt``
-    # True: the estimate is an embedded lower-order method's error, an upper bound that may
-    # exceed the method's own error many times (docs/accuracy.md, "Error estimates").
-    estimate_bounds = False
     # What the estimate leaves out, in words ('' for nothing the tests found): the error it
     # does not see, measured (docs/accuracy.md, "Error estimates").
     estimate_omits = ''
