@@ -12,8 +12,10 @@ import atexit
 import os
 import signal
 import subprocess
+import time
 
 EXIT_TIMEOUT = 60.0   # s: a killed group's first process is reaped within this, on any load
+GRACE = 20.0          # s a group has to end on SIGTERM before SIGKILL (nodes: ~0.1 s)
 _started = []         # every Popen started here, in order
 
 
@@ -30,19 +32,45 @@ def started():
 
 
 def end(process):
-    """Kill ``process``'s whole group with SIGKILL and reap the process; its exit status.
+    """End ``process``'s whole group and reap the process; its exit status.
 
-    Harmless when the process has ended already: what it forked may still be running in
-    its group.
+    SIGTERM first, so that a node destroys itself before it ends; SIGKILL for what is left
+    after GRACE. A node killed outright may die while a DDS thread of it holds another
+    process's shared-memory port lock, which hangs every later node that sends there
+    (docs/ros_notes.md, "Shutdown"). Harmless when the process has ended already: what it
+    forked may still be running in its group.
     """
-    try:
-        os.killpg(process.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass   # nothing left in the group
+    _signal_group(process.pid, signal.SIGTERM)
+    deadline = time.monotonic() + GRACE
+    while _group_running(process.pid) and time.monotonic() < deadline:
+        process.poll()   # the first process, once ended, is reaped, not left a zombie
+        time.sleep(0.05)
+    _signal_group(process.pid, signal.SIGKILL)
     try:
         return process.wait(timeout=EXIT_TIMEOUT)
     except subprocess.TimeoutExpired:
         return None
+
+
+def _signal_group(group, number):
+    try:
+        os.killpg(group, number)
+    except (ProcessLookupError, PermissionError):
+        pass   # nothing left in the group
+
+
+def _group_running(group):
+    """Whether a process of process group ``group`` runs (a zombie has ended)."""
+    for entry in os.scandir('/proc'):
+        if entry.name.isdigit():
+            try:
+                with open(f'/proc/{entry.name}/stat') as stat:
+                    fields = stat.read().rpartition(')')[2].split()
+            except (FileNotFoundError, ProcessLookupError):
+                continue
+            if int(fields[2]) == group and fields[0] not in ('Z', 'X'):
+                return True
+    return False
 
 
 def end_since(mark):

@@ -4,7 +4,8 @@
 
 On a loaded machine a test that timed out once left twenty node processes running: killing
 ``node_forks.py`` alone leaves the nodes it forked. Each process a test starts now has a
-process group of its own, which is killed however the test ends.
+process group of its own, which is ended however the test ends: asked with SIGTERM, then
+killed.
 """
 import json
 import os
@@ -89,3 +90,29 @@ def test_a_run_ended_by_sigterm_ends_the_processes_it_started_first():
     finally:
         run.kill()
         run.wait()
+
+
+ENDS_ON_SIGTERM = """
+import signal, sys, time
+signal.signal(signal.SIGTERM, lambda number, frame: sys.exit(0))
+print('ready', flush=True)
+time.sleep(600)
+"""
+IGNORES_SIGTERM = ENDS_ON_SIGTERM.replace('lambda number, frame: sys.exit(0)', 'signal.SIG_IGN')
+
+
+def test_a_group_is_asked_to_end_before_it_is_killed():
+    """SIGTERM first: a node then destroys itself (a SIGKILL mid-send can hang other nodes)."""
+    process = processes.start([sys.executable, '-c', ENDS_ON_SIGTERM], stdout=subprocess.PIPE,
+                              text=True)
+    assert process.stdout.readline() == 'ready\n'
+    assert processes.end(process) == 0
+
+
+def test_a_group_that_ignores_sigterm_is_killed_after_the_grace(monkeypatch):
+    import signal
+    monkeypatch.setattr(processes, 'GRACE', 0.5)
+    process = processes.start([sys.executable, '-c', IGNORES_SIGTERM], stdout=subprocess.PIPE,
+                              text=True)
+    assert process.stdout.readline() == 'ready\n'
+    assert processes.end(process) == -signal.SIGKILL
