@@ -187,6 +187,12 @@ SPECS = {
 }
 
 
+# The operator's resource limits. Anyone on the graph may set parameters, so at runtime they
+# may be lowered, and raised again up to their value at start, never above it: a client
+# that raised max_samples could make one spawned body sample for minutes and take gigabytes.
+OPERATOR_LIMITS = ('per_body_topics_limit', *RESOURCE_LIMITS, 'max_answer_states')
+
+
 def descriptor(name):
     """Return the ParameterDescriptor of parameter ``name``: description, type note and range."""
     spec = SPECS[name]
@@ -325,10 +331,11 @@ def _check_unknown_overrides(node):
                              f'this node has {sorted(SPECS)}')
 
 
-def updated(settings, changes):
+def updated(settings, changes, at_start):
     """Return the settings with ``changes`` (rclpy Parameters) applied.
 
-    Raises ParameterError saying why a change is refused.
+    Raises ParameterError saying why a change is refused. ``at_start`` are the settings the
+    node started with: the operator's, the ceiling of its resource limits.
 
     Parameters that are not this node's own (``use_sim_time``) are passed over.
     """
@@ -337,6 +344,13 @@ def updated(settings, changes):
     if values.get('resource_paths', settings.resource_paths) != settings.resource_paths:
         raise ParameterError("parameter 'resource_paths': read at start only; a client may "
                              'not widen what files the node reads')
+    for name in OPERATOR_LIMITS:
+        ceiling = getattr(at_start, name)
+        if values.get(name, ceiling) > ceiling:
+            raise ParameterError(
+                f"parameter '{name}': {values[name]} is above {ceiling}, its value at start: "
+                "a client may lower the node's resource limits, never raise them above the "
+                "operator's")
     if values.get('start_paused', settings.start_paused) != settings.start_paused:
         raise ParameterError("parameter 'start_paused': read at start only; call ~/pause to "
                              'pause or resume the running node')

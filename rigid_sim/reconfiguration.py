@@ -41,6 +41,7 @@ class Reconfiguration:
     def __init__(self, node):
         self._node = node
         self.accepted = node.settings   # what the parameters say; node.settings is what runs
+        self.at_start = node.settings   # the operator's: the ceiling of the resource limits
         self.last_refusal = ''
         self._proposed = None
         self._job = None                # the preparation asked for, queued, not begun
@@ -57,7 +58,7 @@ class Reconfiguration:
 
     def _on_set(self, changes):
         try:
-            proposed = parameters.updated(self.accepted, changes)
+            proposed = parameters.updated(self.accepted, changes, self.at_start)
             names = {change.name for change in changes}
             if 'scene' in names and not self._reverting:
                 find_scene(proposed.scene, proposed.resource_paths)   # refused at once

@@ -294,6 +294,26 @@ def test_a_scene_cannot_raise_its_limits_at_start_or_at_runtime(
     assert [body.name for body in sim.node.scene.bodies] == ['b0', 'b1', 'b2']
 
 
+@pytest.mark.parametrize('name', ['max_samples', 'max_answer_states', 'per_body_topics_limit'])
+def test_a_client_may_lower_a_resource_limit_but_never_raise_it_above_the_start(
+        rigid_sim, name):
+    """Anyone on the graph may set parameters: the operator's limits are a ceiling.
+
+    Raised by a client, max_samples would let one spawned body sample for minutes and take
+    gigabytes (the GREEDY body above: 1e8 samples, ~45 s, 9.6 GB).
+    """
+    sim = rigid_sim(yaml=SCENE, time_step=0.125)
+    start = getattr(sim.node.settings, name)
+    raised, = sim.set_parameters(**{name: start + 1})
+    assert not raised.successful
+    assert f"'{name}': {start + 1} is above {start}, its value at start" in raised.reason
+    assert getattr(sim.node.settings, name) == sim.node.get_parameter(name).value == start
+    lowered, = sim.set_parameters(**{name: start // 2})
+    assert lowered.successful and getattr(sim.node.settings, name) == start // 2
+    back, = sim.set_parameters(**{name: start})
+    assert back.successful and getattr(sim.node.settings, name) == start
+
+
 def test_start_paused_set_at_runtime_is_refused_pointing_at_pause(rigid_sim):
     """start_paused is read at start only: a change at runtime is refused, not ignored."""
     sim = rigid_sim(yaml=SCENE, time_step=0.125)

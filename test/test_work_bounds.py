@@ -204,7 +204,8 @@ def test_get_entities_states_refuses_more_states_than_one_answer_may_carry(rigid
     """An answer of more states than max_answer_states is refused with the count, not cut."""
     from simulation_interfaces.msg import EntityFilters, Result
     from simulation_interfaces.srv import GetEntitiesStates
-    sim = rigid_sim(yaml=THREE, rate=0.0, start_paused=True, max_answer_states=2)
+    sim = rigid_sim(yaml=THREE, rate=0.0, start_paused=True, max_answer_states=3)
+    sim.set_parameters(max_answer_states=2)   # lowered at runtime, raised back below
 
     def states(pattern=''):
         request = GetEntitiesStates.Request(filters=EntityFilters(filter=pattern))
