@@ -28,7 +28,8 @@ from rigid_sim.core.contact.impact import least_gap, strike, struck_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import Contacts
 from rigid_sim.core.contact.shapes import shape_arrays
-from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step, ROW
+from rigid_sim.core.contact.solver import ROW
+from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step
 from rigid_sim.core.scene_fields import (
     choice, count, list_of, Mistake, non_negative, number, REQUIRED, table, vector)
 from rigid_sim.core.dispatch import CompiledCall

@@ -22,10 +22,9 @@ from rigid_sim.core.contact.broad import overlapping_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
-    apply, coupling, friction_row, normal_row, relative_velocity, tangents,
-    world_inverse_inertia)
+    apply, coupling, friction_row, MOMENT, normal_row, relative_velocity, store_jacobians,
+    tangents, TURN, world_inverse_inertia)
 
-ROW = 24             # width of a contact's row of solver constants
 # A solve stops at the sweep whose largest change of an impulse is at most this fraction of
 # the largest impulse: further sweeps would change the velocities by round-off only.
 CONVERGED = 1e-12
@@ -260,6 +259,8 @@ def contact_row(y, model, parameters, work, s, c, softness):
     t1, t2 = tangents(n)
     for k, v in enumerate((arm_a, arm_b, n, t1, t2)):
         kin.store(rows, s, 3 * k, v)
+    for k, u in enumerate((n, t1, t2)):
+        store_jacobians(rows, s, inertia, a, b, arm_a, arm_b, u, MOMENT + 6 * k, TURN + 6 * k)
     m = model.inverse_mass
     k11 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t1)
     k12 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t2)
@@ -314,7 +315,7 @@ def solve_impulses(model, parameters, work, count, softness):
 
     ``softness`` is the compliance over the step squared (0 at an instant).
     """
-    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    rows, m = work.rows, model.inverse_mass
     # Sweeps of the normal impulses alone first: friction then starts from the weights
     # the contacts carry, not from the rotations a first sweep's uneven pushes make. Each
     # solve stops at the sweep that changes no impulse by more than CONVERGED of the
@@ -322,17 +323,17 @@ def solve_impulses(model, parameters, work, count, softness):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
-                                            softness, work.body, work.lam, rows[s, 19]))
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, softness,
+                                            work.body, work.lam, rows[s, 19]))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
-                                            softness, work.body, work.lam, rows[s, 19]))
-            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m, inertia,
+            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, softness,
+                                            work.body, work.lam, rows[s, 19]))
+            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m,
                                               parameters.friction, work.body, work.lam))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
@@ -342,7 +343,7 @@ def solve_impulses(model, parameters, work, count, softness):
 @helper
 def _solve(model, parameters, work, count, h):
     """Gauss-Seidel sweeps of the impulses, then of the position correction."""
-    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    rows, m = work.rows, model.inverse_mass
     solve_impulses(model, parameters, work, count, parameters.compliance / (h * h))
     # The penetration is removed within the step.
     for s in range(count):
@@ -352,8 +353,8 @@ def _solve(model, parameters, work, count, h):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, inertia, 0.0,
-                                            work.body, work.push, rows[s, 23]))
+            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, 0.0, work.body,
+                                            work.push, rows[s, 23]))
             largest = max(largest, work.push[s, 0])
         if change <= CONVERGED * largest:
             break
