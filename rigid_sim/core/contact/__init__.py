@@ -144,7 +144,7 @@ class Contact:
                               np.empty((contacts, 3)), np.empty(contacts)),
             order=np.empty(contacts, dtype=np.int64), rows=np.empty((contacts, ROW)),
             body=np.empty((contacts, 2), dtype=np.int64), lam=np.empty((contacts, 3)),
-            push=np.empty((contacts, 1)), none=np.empty((0, 9)),
+            push=np.empty((contacts, 1)),
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
             last_count=np.zeros(1, dtype=np.int64),
             struck=np.empty((contacts, 2), dtype=np.int64))

@@ -85,40 +85,6 @@ def relative_velocity(velocity, a, b, arm_a, arm_b):
     return v
 
 
-@helper(inline='always')
-def _push(velocity, impulse, inverse_mass, inv_inertia, i, arm, j, sliding):
-    """Apply the impulse ``j`` at ``arm`` to body ``i``: its velocities and (if kept) sums.
-
-    ``impulse`` (N, 9) sums the linear and angular impulses, then the linear impulse of
-    friction alone (``sliding``); an empty one keeps none.
-    """
-    moment = kin.cross(arm, j)
-    turn = kin.rotate(kin.entries(inv_inertia, i), moment)
-    for k in range(3):
-        velocity[i, k] += inverse_mass[i] * j[k]
-        velocity[i, 3 + k] += turn[k]
-    if impulse.shape[0] > 0:
-        for k in range(3):
-            impulse[i, k] += j[k]
-            impulse[i, 3 + k] += moment[k]
-            if sliding:
-                impulse[i, 6 + k] += j[k]
-
-
-@helper(inline='always')
-def apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, sliding):
-    """Apply ``j`` to ``a`` and ``-j`` to ``b`` (none for a plane) at their arms.
-
-    ``impulse`` (N, 9) sums each body's linear and angular impulse, then (``sliding``:
-    ``j`` is friction) friction's linear impulse alone; an empty one keeps none (the
-    pseudo-velocities of the position correction).
-    """
-    _push(velocity, impulse, inverse_mass, inv_inertia, a, arm_a, j, sliding)
-    if b >= 0:
-        _push(velocity, impulse, inverse_mass, inv_inertia, b, arm_b, kin.scaled(-1.0, j),
-              sliding)
-
-
 # Columns of a contact's row (``rows``, (C, ROW)) that a sweep reads. Per direction
 # ``u`` (the normal, tangent 1, tangent 2): ``arm x u`` of body a then b (its angular
 # Jacobian), and the inverse world inertia times it (the turn a unit impulse along ``u``
@@ -159,25 +125,57 @@ def _speed_along(rows, s, velocity, a, b, u, moment):
 
 
 @helper(inline='always')
-def _impel(velocity, impulse, inverse_mass, i, sign, j, moment, turn, sliding):
-    """Add ``sign`` times the linear impulse ``j``, its moment and turn to body ``i``.
-
-    ``impulse`` (N, 9) sums each body's linear and angular impulse, then (``sliding``)
-    friction's linear impulse alone; an empty one keeps none.
-    """
+def _impel(velocity, inverse_mass, i, sign, j, turn):
+    """Change body ``i``'s velocities by ``sign`` times the linear impulse ``j`` and ``turn``."""
     for k in range(3):
         velocity[i, k] += sign * inverse_mass[i] * j[k]
         velocity[i, 3 + k] += sign * turn[k]
-    if impulse.shape[0] > 0:
-        for k in range(3):
-            impulse[i, k] += sign * j[k]
-            impulse[i, 3 + k] += sign * moment[k]
-            if sliding:
-                impulse[i, 6 + k] += sign * j[k]
 
 
 @helper(inline='always')
-def friction_row(rows, s, velocity, impulse, inverse_mass, mu, body, lam):
+def _along_row(rows, s, column, c_n, c_1, c_2):
+    """``c_n u_n + c_1 u_1 + c_2 u_2``, the vectors ``u`` at ``column``, +6, +12 of row ``s``."""
+    return kin.add(kin.scaled(c_n, kin.vector(rows, s, column)),
+                   kin.add(kin.scaled(c_1, kin.vector(rows, s, column + 6)),
+                           kin.scaled(c_2, kin.vector(rows, s, column + 12))))
+
+
+@helper
+def warm_start(rows, s, velocity, inverse_mass, body, lam):
+    """Change the velocities by contact ``s``'s impulse ``lam[s]`` (normal, two tangential)."""
+    j = kin.add(kin.scaled(lam[s, 0], kin.vector(rows, s, NORMAL)),
+                kin.add(kin.scaled(lam[s, 1], kin.vector(rows, s, TANGENT_1)),
+                        kin.scaled(lam[s, 2], kin.vector(rows, s, TANGENT_2))))
+    for k, (i, sign) in enumerate(((body[s, 0], 1.0), (body[s, 1], -1.0))):
+        if i >= 0:
+            turn = _along_row(rows, s, TURN + 3 * k, lam[s, 0], lam[s, 1], lam[s, 2])
+            _impel(velocity, inverse_mass, i, sign, j, turn)
+
+
+@helper
+def impulse_sums(rows, body, lam, count, impulse):
+    """Each body's impulse (N, 9) from the first ``count`` contacts' impulses ``lam``.
+
+    Linear and angular (about the centre of mass), then friction's linear impulse alone.
+    Summed once from the solve's end impulses, where summing each sweep's changes (the
+    same total) was a third of a sweep's memory traffic.
+    """
+    impulse[...] = 0.0
+    for s in range(count):
+        friction = kin.add(kin.scaled(lam[s, 1], kin.vector(rows, s, TANGENT_1)),
+                           kin.scaled(lam[s, 2], kin.vector(rows, s, TANGENT_2)))
+        j = kin.add(kin.scaled(lam[s, 0], kin.vector(rows, s, NORMAL)), friction)
+        for k, (i, sign) in enumerate(((body[s, 0], 1.0), (body[s, 1], -1.0))):
+            if i >= 0:
+                moment = _along_row(rows, s, MOMENT + 3 * k, lam[s, 0], lam[s, 1], lam[s, 2])
+                for c in range(3):
+                    impulse[i, c] += sign * j[c]
+                    impulse[i, 3 + c] += sign * moment[c]
+                    impulse[i, 6 + c] += sign * friction[c]
+
+
+@helper(inline='always')
+def friction_row(rows, s, velocity, inverse_mass, mu, body, lam):
     """One Gauss-Seidel update of contact ``s``'s tangential impulse, kept in the cone.
 
     ``rows`` (C, ROW): arm a, arm b, normal, tangent 1, tangent 2, the tangential mass, two
@@ -187,9 +185,8 @@ def friction_row(rows, s, velocity, impulse, inverse_mass, mu, body, lam):
     """
     a, b = body[s, 0], body[s, 1]
     t1, t2 = kin.vector(rows, s, TANGENT_1), kin.vector(rows, s, TANGENT_2)
-    m1, m2 = MOMENT + 6, MOMENT + 12
-    v1 = _speed_along(rows, s, velocity, a, b, TANGENT_1, m1)
-    v2 = _speed_along(rows, s, velocity, a, b, TANGENT_2, m2)
+    v1 = _speed_along(rows, s, velocity, a, b, TANGENT_1, MOMENT + 6)
+    v2 = _speed_along(rows, s, velocity, a, b, TANGENT_2, MOMENT + 12)
     # One step against the slip, of the largest mobility's inverse: it stops the slip along
     # that direction and under-steps the other, so sweeps converge; on the disc's edge the
     # result stays against the slip (maximal dissipation), where a 2x2 solve of an
@@ -203,19 +200,16 @@ def friction_row(rows, s, velocity, impulse, inverse_mass, mu, body, lam):
     d1, d2 = l1 - lam[s, 1], l2 - lam[s, 2]
     lam[s, 1], lam[s, 2] = l1, l2
     j = kin.add(kin.scaled(d1, t1), kin.scaled(d2, t2))
-    t1_turn, t2_turn = TURN + 6, TURN + 12
     for k, (i, sign) in enumerate(((a, 1.0), (b, -1.0))):
         if i >= 0:
-            moment = kin.add(kin.scaled(d1, kin.vector(rows, s, m1 + 3 * k)),
-                             kin.scaled(d2, kin.vector(rows, s, m2 + 3 * k)))
-            turn = kin.add(kin.scaled(d1, kin.vector(rows, s, t1_turn + 3 * k)),
-                           kin.scaled(d2, kin.vector(rows, s, t2_turn + 3 * k)))
-            _impel(velocity, impulse, inverse_mass, i, sign, j, moment, turn, True)
+            turn = kin.add(kin.scaled(d1, kin.vector(rows, s, TURN + 6 + 3 * k)),
+                           kin.scaled(d2, kin.vector(rows, s, TURN + 12 + 3 * k)))
+            _impel(velocity, inverse_mass, i, sign, j, turn)
     return max(abs(d1), abs(d2))
 
 
 @helper(inline='always')
-def normal_row(rows, s, velocity, impulse, inverse_mass, softness, body, lam, target):
+def normal_row(rows, s, velocity, inverse_mass, softness, body, lam, target):
     """One Gauss-Seidel update of contact ``s``'s normal impulse toward ``target``, kept >= 0.
 
     ``softness`` is the compliance over the step squared, (m/s) per (N s): a soft contact
@@ -223,17 +217,14 @@ def normal_row(rows, s, velocity, impulse, inverse_mass, softness, body, lam, ta
     Returns the size of the change, N s.
     """
     a, b = body[s, 0], body[s, 1]
-    moment = MOMENT
-    vn = _speed_along(rows, s, velocity, a, b, NORMAL, moment)
+    vn = _speed_along(rows, s, velocity, a, b, NORMAL, MOMENT)
     # The change, not the new impulse, is what the velocities wait for: it is clipped at
     # -lam directly (the impulse stays >= 0) rather than read back off the clipped sum.
     change = max(-lam[s, 0], (target - vn - softness * lam[s, 0]) * rows[s, 18])
     lam[s, 0] += change
     j = kin.scaled(change, kin.vector(rows, s, NORMAL))
-    turn = TURN
     for k, (i, sign) in enumerate(((a, 1.0), (b, -1.0))):
         if i >= 0:
-            _impel(velocity, impulse, inverse_mass, i, sign, j,
-                   kin.scaled(change, kin.vector(rows, s, moment + 3 * k)),
-                   kin.scaled(change, kin.vector(rows, s, turn + 3 * k)), False)
+            _impel(velocity, inverse_mass, i, sign, j,
+                   kin.scaled(change, kin.vector(rows, s, TURN + 3 * k)))
     return abs(change)

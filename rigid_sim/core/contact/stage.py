@@ -22,8 +22,8 @@ from rigid_sim.core.contact.broad import overlapping_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
-    apply, coupling, friction_row, MOMENT, normal_row, relative_velocity, store_jacobians,
-    tangents, TURN, world_inverse_inertia)
+    coupling, friction_row, impulse_sums, MOMENT, normal_row, relative_velocity,
+    store_jacobians, tangents, TURN, warm_start, world_inverse_inertia)
 
 # A solve stops at the sweep whose largest change of an impulse is at most this fraction of
 # the largest impulse: further sweeps would change the velocities by round-off only.
@@ -58,7 +58,7 @@ class ContactWork(NamedTuple):
     active: np.ndarray     # (N,) bool: has a collision shape
     inertia: np.ndarray    # (N, 3, 3) world inverse inertia, 1/(kg m^2)
     velocity: np.ndarray   # (N, 6) linear and angular velocity
-    impulse: np.ndarray    # (N, 9) this step's linear and angular impulse, N s, N m s;
+    impulse: np.ndarray    # (N, 9) the solve's linear and angular impulse, N s, N m s;
     # then friction's linear impulse alone
     pseudo: np.ndarray     # (N, 6) position-correction velocities
     pairs: np.ndarray      # (M, 2) int
@@ -68,7 +68,6 @@ class ContactWork(NamedTuple):
     body: np.ndarray       # (C, 2) int bodies, in key order
     lam: np.ndarray        # (C, 3) normal and tangential impulse, N s, in key order
     push: np.ndarray       # (C, 1) position-correction impulse
-    none: np.ndarray       # (0, 9): the pseudo-solve keeps no impulse sums
     last_key: np.ndarray   # (C,) int: the last step's keys, sorted
     last_lam: np.ndarray   # (C, 3) and their impulses
     last_count: np.ndarray  # (1,) int
@@ -87,8 +86,6 @@ def _shapes(y, model, parameters, work):
             work.inertia[i, k // 3, k % 3] = inertia[k]
         kin.store(work.velocity, i, 0, kin.scaled(model.inverse_mass[i], p))
         kin.store(work.velocity, i, 3, kin.rotate(inertia, big_l))
-        for k in range(9):
-            work.impulse[i, k] = 0.0
         for k in range(6):
             work.pseudo[i, k] = 0.0
         centre = kin.add(x, kin.rotate(r, kin.vector(parameters.offset, i, 0)))
@@ -229,7 +226,7 @@ def _pair_contacts(parameters, work, pairs, count, slots):
 
 
 @helper
-def _warm_start(work, key):
+def _last_row(work, key):
     """Find the last step's row of the contact with ``key`` (-1: none), by binary search."""
     low, high = 0, work.last_count[0]
     while low < high:
@@ -277,7 +274,7 @@ def contact_row(y, model, parameters, work, s, c, softness):
 @helper
 def _set_up(y, model, parameters, work, count, h):
     """Each contact's row of constants, in key order, and its warm-started impulse."""
-    contacts, rows, inertia = work.contacts, work.rows, work.inertia
+    contacts, rows = work.contacts, work.rows
     m = model.inverse_mass
     for s in range(count):
         c = work.order[s]
@@ -297,16 +294,10 @@ def _set_up(y, model, parameters, work, count, h):
             rows[s, 19] = -parameters.restitution * approach if bounces else closing
         rows[s, 20] = approach
         rows[s, 21] = distance
-        last = _warm_start(work, contacts.key[c])
+        last = _last_row(work, contacts.key[c])
         for k in range(3):
             work.lam[s, k] = work.last_lam[last, k] if last >= 0 else 0.0
-        a, b = work.body[s, 0], work.body[s, 1]
-        arm_a, arm_b = kin.vector(rows, s, 0), kin.vector(rows, s, 3)
-        n, t1, t2 = kin.vector(rows, s, 6), kin.vector(rows, s, 9), kin.vector(rows, s, 12)
-        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b,
-              kin.scaled(work.lam[s, 0], n), False)
-        friction = kin.add(kin.scaled(work.lam[s, 1], t1), kin.scaled(work.lam[s, 2], t2))
-        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b, friction, True)
+        warm_start(rows, s, work.velocity, m, work.body, work.lam)
 
 
 @helper
@@ -323,21 +314,22 @@ def solve_impulses(model, parameters, work, count, softness):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, softness,
-                                            work.body, work.lam, rows[s, 19]))
+            change = max(change, normal_row(rows, s, work.velocity, m, softness, work.body,
+                                            work.lam, rows[s, 19]))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, softness,
-                                            work.body, work.lam, rows[s, 19]))
-            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m,
-                                              parameters.friction, work.body, work.lam))
+            change = max(change, normal_row(rows, s, work.velocity, m, softness, work.body,
+                                            work.lam, rows[s, 19]))
+            change = max(change, friction_row(rows, s, work.velocity, m, parameters.friction,
+                                              work.body, work.lam))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
+    impulse_sums(rows, work.body, work.lam, count, work.impulse)
 
 
 @helper
@@ -353,8 +345,8 @@ def _solve(model, parameters, work, count, h):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, 0.0, work.body,
-                                            work.push, rows[s, 23]))
+            change = max(change, normal_row(rows, s, work.pseudo, m, 0.0, work.body, work.push,
+                                            rows[s, 23]))
             largest = max(largest, work.push[s, 0])
         if change <= CONVERGED * largest:
             break
