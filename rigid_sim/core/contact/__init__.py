@@ -23,10 +23,11 @@ import copy
 
 import numpy as np
 
+from rigid_sim.core.contact.convex import convex_scratch
 from rigid_sim.core.contact.exact import ExactSteps
 from rigid_sim.core.contact.impact import least_gap, strike, struck_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
-from rigid_sim.core.contact.narrow import Contacts
+from rigid_sim.core.contact.narrow import Contacts, CYLINDER
 from rigid_sim.core.contact.shapes import shape_arrays
 from rigid_sim.core.contact.solver import ROW
 from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step
@@ -147,7 +148,8 @@ class Contact:
             push=np.empty((contacts, 1)),
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
             last_count=np.zeros(1, dtype=np.int64),
-            struck=np.empty((contacts, 2), dtype=np.int64))
+            struck=np.empty((contacts, 2), dtype=np.int64), clip=np.empty((2, 8, 3)),
+            convex=convex_scratch(CYLINDER in self.parameters.shapes.kinds))
         if last is not None:
             kept = last.last_count[0]
             work.last_key[:kept] = last.last_key[:kept]

@@ -72,6 +72,8 @@ class ContactWork(NamedTuple):
     last_lam: np.ndarray   # (C, 3) and their impulses
     last_count: np.ndarray  # (1,) int
     struck: np.ndarray     # (C, 2) int: pairs struck within a step (mode: exact)
+    clip: np.ndarray       # (2, 8, 3): a box-box face patch's polygon and its next cut
+    convex: convex.ConvexScratch   # GJK's and EPA's (empty without cylinders)
 
 
 @helper
@@ -151,8 +153,8 @@ def _plane_contacts_for(shapes, parameters, work, slots):
     return plane_contacts
 
 
-def _pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
-          cb, rb, flip):
+def _pair(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b, cb,
+          rb, flip):
     """One pair's narrow phase, ``kind_a <= kind_b``; ``flip``: they were swapped for it.
 
     A swapped pair writes ``b`` first and its normals point the other way, as
@@ -162,13 +164,14 @@ def _pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, 
 
 
 @overload(_pair)
-def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
-              size_b, cb, rb, flip):
+def _pair_for(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
+              cb, rb, flip):
     # Constants of the closure: numba prunes a branch on a false one before typing its callee.
     capsules, cylinders = CAPSULE in shapes.kinds, CYLINDER in shapes.kinds
 
-    def pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
-             size_b, cb, rb, flip):
+    def pair(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
+             cb, rb, flip):
+        contacts = work.contacts
         first, second = (b, a) if flip else (a, b)
         if kind_a == SPHERE and kind_b == SPHERE:
             return narrow.sphere_sphere(contacts, count, first, second, slots, margin, ca,
@@ -178,7 +181,7 @@ def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, 
                                      size_a[0], cb, rb, size_b, flip)
         if kind_a == BOX and kind_b == BOX:
             return narrow.box_box(contacts, count, first, second, slots, margin, ca, ra,
-                                  size_a, cb, rb, size_b)
+                                  size_a, cb, rb, size_b, work.clip)
         if capsules and kind_b == CAPSULE:
             axis_b = narrow.axis(rb, 2)
             if kind_a == SPHERE:
@@ -200,16 +203,16 @@ def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, 
         # A cylinder with a box, a capsule or a cylinder: by their support mappings.
         if flip:
             return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
-                                      size_b, cb, rb, kind_a, size_a, ca, ra)
+                                      size_b, cb, rb, kind_a, size_a, ca, ra, work.convex)
         return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a,
-                                  size_a, ca, ra, kind_b, size_b, cb, rb)
+                                  size_a, ca, ra, kind_b, size_b, cb, rb, work.convex)
     return pair
 
 
 @helper
 def _pair_contacts(parameters, work, pairs, count, slots):
     """Run the narrow phase of each of the first ``pairs`` pairs, after ``count`` contacts."""
-    contacts, kind, size = work.contacts, parameters.kind, parameters.size
+    kind, size = parameters.kind, parameters.size
     margin, shapes = parameters.margin, parameters.shapes
     for k in range(pairs):
         a, b = work.pairs[k, 0], work.pairs[k, 1]
@@ -217,10 +220,10 @@ def _pair_contacts(parameters, work, pairs, count, slots):
         ra, rb = kin.entries(work.rotation, a), kin.entries(work.rotation, b)
         sa, sb = kin.vector(size, a, 0), kin.vector(size, b, 0)
         if kind[a] <= kind[b]:
-            count = _pair(shapes, contacts, count, a, b, slots, margin, kind[a], sa, ca, ra,
+            count = _pair(shapes, work, count, a, b, slots, margin, kind[a], sa, ca, ra,
                           kind[b], sb, cb, rb, False)
         else:
-            count = _pair(shapes, contacts, count, b, a, slots, margin, kind[b], sb, cb, rb,
+            count = _pair(shapes, work, count, b, a, slots, margin, kind[b], sb, cb, rb,
                           kind[a], sa, ca, ra, True)
     return count
 
