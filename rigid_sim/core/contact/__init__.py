@@ -149,7 +149,9 @@ class Contact:
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
             last_count=np.zeros(1, dtype=np.int64),
             struck=np.empty((contacts, 2), dtype=np.int64), clip=np.empty((2, 8, 3)),
-            convex=convex_scratch(CYLINDER in self.parameters.shapes.kinds))
+            convex=convex_scratch(CYLINDER in self.parameters.shapes.kinds),
+            detected=np.empty((n if self.parameters.exact else 0, 13)),
+            reuse=np.zeros(3, dtype=np.int64))
         if last is not None:
             kept = last.last_count[0]
             work.last_key[:kept] = last.last_key[:kept]
@@ -190,6 +192,7 @@ class Contact:
     def forget(self):
         """Drop the warm start: the next step solves from zero impulses (a reset)."""
         self.work.last_count[0] = 0
+        self.work.reuse[0] = 0   # and detects again, whatever state it meets
 
     def resolve(self, y, h, model):
         """Resolve the contacts of ``y`` (N, 13), which a step of ``h`` s ended at, in place.

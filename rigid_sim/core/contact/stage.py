@@ -73,6 +73,10 @@ class ContactWork(NamedTuple):
     last_count: np.ndarray  # (1,) int
     struck: np.ndarray     # (C, 2) int: pairs struck within a step (mode: exact)
     clip: np.ndarray       # (2, 8, 3): a box-box face patch's polygon and its next cut
+    detected: np.ndarray   # (N, 13) in exact mode, else (0, 13): the state struck_pairs
+    # left its detection of in this scratch, which contact_step then reads (see reuse)
+    reuse: np.ndarray      # (3,) int: 1 while that detection is what the scratch holds, its
+    # contacts and pairs
     convex: convex.ConvexScratch   # GJK's and EPA's (empty without cylinders)
 
 
@@ -392,12 +396,38 @@ def detect(y, model, parameters, work):
     contacts were not all written.
     """
     slots = y.shape[0] + parameters.planes.shape[0]
+    work.reuse[0] = 0   # the scratch is being overwritten: what it held is gone
     _shapes(y, model, parameters, work)
     count = _plane_contacts(parameters.shapes, parameters, work, slots)
     pairs = overlapping_pairs(work.low, work.high, work.active, work.pairs)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
     return _pair_contacts(parameters, work, pairs, count, slots), pairs
+
+
+@helper
+def keep_detection(y, work, count, pairs):
+    """Say the scratch holds the detection of ``y`` (exact mode): ``count`` contacts, ``pairs``.
+
+    Exact mode's check of a step (``impact.struck_pairs``) detects the state the step ended
+    at; when nothing was struck, the velocity-level stage runs on that same state next and
+    reads this detection instead of making it again.
+    """
+    work.detected[...] = y
+    work.reuse[0], work.reuse[1], work.reuse[2] = 1, count, pairs
+
+
+@helper
+def _kept_detection(y, work):
+    """Whether the scratch holds the detection of ``y``: the state kept, to the bit."""
+    if work.reuse[0] == 0 or work.detected.shape != y.shape:
+        return False
+    for i in range(y.shape[0]):
+        for k in range(y.shape[1]):
+            a, b = y[i, k], work.detected[i, k]
+            if a != b or math.copysign(1.0, a) != math.copysign(1.0, b):
+                return False
+    return True
 
 
 @helper
@@ -415,7 +445,11 @@ def contact_step(y, model, parameters, h, work):
     Returns ``(contacts, pairs)``: how many of each were found. When either is above the
     room of ``work`` nothing was changed: the caller grows ``work`` and calls again.
     """
-    count, pairs = detect(y, model, parameters, work)
+    if _kept_detection(y, work):
+        count, pairs = work.reuse[1], work.reuse[2]
+        work.reuse[0] = 0   # read once: the solve below changes the scratch's velocities
+    else:
+        count, pairs = detect(y, model, parameters, work)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
     sort_by_key(work, count)
