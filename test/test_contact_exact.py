@@ -189,6 +189,37 @@ def test_exact_mode_refuses_shapes_it_has_no_impact_gap_for(kind):
     parse_scene({'effects': {'contact': {'mode': 'velocity'}}, 'bodies': [pill]})
 
 
+def test_the_stage_reads_the_checks_detection_to_the_bits_of_its_own():
+    """The stage after a check that struck nothing ends where detecting again would.
+
+    A step's check keeps its detection of the state the step ended at for the velocity-level
+    stage. A twin stage (the same warm start) that detects that state itself must end at the
+    same bits; a state changed after the check (a ball lifted off its box) is detected anew.
+    """
+    bodies = [body('box', {'type': 'box', 'size': [0.2, 0.2, 0.2]}, (0.0, 0.0, 0.1)),
+              body('ball', {'type': 'sphere', 'radius': 0.1}, (0.0, 0.0, 0.3)),
+              body('slider', {'type': 'box', 'size': [0.2, 0.2, 0.2]}, (1.0, 0.0, 0.1),
+                   (0.5, 0.0, 0.0))]
+    world = exact_world(bodies, restitution=0.6, friction=0.2)
+    for _ in range(20):
+        world.step(0.01)
+    y, model = world.y.copy(), world.bodies.model
+    ends = {}
+    for name, lift in (('same', 0.0), ('lifted', 1e-3)):
+        kept, own = world.contact.duplicate(), world.contact.duplicate()
+        assert kept.struck(y, y, model) == 0 and kept.work.reuse[0] == 1
+        end = y.copy()
+        end[1, 2] += lift
+        own_end = end.copy()
+        found = kept.resolve(end, 0.01, model)
+        assert found == own.resolve(own_end, 0.01, model)
+        np.testing.assert_array_equal(end, own_end)
+        np.testing.assert_array_equal(kept.work.last_lam[:found], own.work.last_lam[:found])
+        assert kept.work.reuse[0] == 0   # read once
+        ends[name] = found
+    assert ends['lifted'] == ends['same'] - 1   # the ball's one contact with the box is gone
+
+
 def test_warm_up_compiles_exact_mode_and_changes_nothing():
     """The node warms a world up before it ticks: exact mode's kernels are among those."""
     from rigid_sim.core.warm_up import warm_up

@@ -23,12 +23,14 @@ import copy
 
 import numpy as np
 
+from rigid_sim.core.contact.convex import convex_scratch
 from rigid_sim.core.contact.exact import ExactSteps
 from rigid_sim.core.contact.impact import least_gap, strike, struck_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
-from rigid_sim.core.contact.narrow import Contacts
+from rigid_sim.core.contact.narrow import Contacts, CYLINDER
 from rigid_sim.core.contact.shapes import shape_arrays
-from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step, ROW
+from rigid_sim.core.contact.solver import ROW
+from rigid_sim.core.contact.stage import ContactParameters, ContactWork, contact_step
 from rigid_sim.core.scene_fields import (
     choice, count, list_of, Mistake, non_negative, number, REQUIRED, table, vector)
 from rigid_sim.core.dispatch import CompiledCall
@@ -143,10 +145,13 @@ class Contact:
                               np.empty((contacts, 3)), np.empty(contacts)),
             order=np.empty(contacts, dtype=np.int64), rows=np.empty((contacts, ROW)),
             body=np.empty((contacts, 2), dtype=np.int64), lam=np.empty((contacts, 3)),
-            push=np.empty((contacts, 1)), none=np.empty((0, 9)),
+            push=np.empty((contacts, 1)),
             last_key=np.empty(contacts, dtype=np.int64), last_lam=np.empty((contacts, 3)),
             last_count=np.zeros(1, dtype=np.int64),
-            struck=np.empty((contacts, 2), dtype=np.int64))
+            struck=np.empty((contacts, 2), dtype=np.int64), clip=np.empty((2, 8, 3)),
+            convex=convex_scratch(CYLINDER in self.parameters.shapes.kinds),
+            detected=np.empty((n if self.parameters.exact else 0, 13)),
+            reuse=np.zeros(3, dtype=np.int64))
         if last is not None:
             kept = last.last_count[0]
             work.last_key[:kept] = last.last_key[:kept]
@@ -187,6 +192,7 @@ class Contact:
     def forget(self):
         """Drop the warm start: the next step solves from zero impulses (a reset)."""
         self.work.last_count[0] = 0
+        self.work.reuse[0] = 0   # and detects again, whatever state it meets
 
     def resolve(self, y, h, model):
         """Resolve the contacts of ``y`` (N, 13), which a step of ``h`` s ended at, in place.

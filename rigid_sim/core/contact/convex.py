@@ -18,6 +18,7 @@ corners, a capsule's end spheres. Each within the margin is a contact, its norma
 shape's at its closest point.
 """
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -38,6 +39,42 @@ EPA_STEPS = 160
 FACES = 4 + 2 * 3 * EPA_STEPS + 16
 # Feature numbers of the shapes' own points: after the deepest contact (0), a's then b's.
 SHAPE_POINTS = 30
+
+
+class ConvexScratch(NamedTuple):
+    """GJK's and EPA's arrays: made once with the stage's scratch, not at every pair.
+
+    Made per pair they were 16 allocations a cylinder's pair and step, EPA's ~100 kB.
+    """
+
+    simplex: np.ndarray     # (4, 3) GJK's support points of A - B, EPA's first tetrahedron
+    simplex_a: np.ndarray   # (4, 3) the points of A they came from
+    simplex_b: np.ndarray   # (4, 3) and of B
+    weights: np.ndarray     # (4,) barycentric weights of the closest point
+    edges: np.ndarray       # (3, 3) a face's edges from its first vertex
+    gram: np.ndarray        # (3, 3) their dot products
+    index: np.ndarray       # (3,) int: the face's other vertices
+    rhs: np.ndarray         # (3,)
+    vertices: np.ndarray    # (4 + EPA_STEPS, 3) EPA's polytope, A - B
+    vertices_a: np.ndarray  # (4 + EPA_STEPS, 3) the points of A they came from
+    vertices_b: np.ndarray  # (4 + EPA_STEPS, 3) and of B
+    faces: np.ndarray       # (FACES, 3) int: vertex indices, counter-clockwise from outside
+    normals: np.ndarray     # (FACES, 3) unit outward normals
+    distances: np.ndarray   # (FACES,) from the origin
+    alive: np.ndarray       # (FACES,) bool: still on the polytope
+    horizon: np.ndarray     # (3 FACES, 2) int: the edges around the faces a point removes
+
+
+def convex_scratch(room):
+    """Return a :class:`ConvexScratch`; empty arrays unless ``room`` (a scene with cylinders)."""
+    k = 1 if room else 0
+    vertices, faces = k * (4 + EPA_STEPS), k * FACES
+    return ConvexScratch(
+        np.empty((4 * k, 3)), np.empty((4 * k, 3)), np.empty((4 * k, 3)), np.empty(4 * k),
+        np.empty((3 * k, 3)), np.empty((3 * k, 3)), np.empty(3 * k, dtype=np.int64),
+        np.empty(3 * k), np.empty((vertices, 3)), np.empty((vertices, 3)),
+        np.empty((vertices, 3)), np.empty((faces, 3), dtype=np.int64), np.empty((faces, 3)),
+        np.empty(faces), np.empty(faces, dtype=np.bool_), np.empty((3 * faces, 2), dtype=np.int64))
 
 
 @helper
@@ -179,15 +216,20 @@ def _keep(mask, n, w, wa, wb, weights):
 
 
 @helper
-def _gjk(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, w, wa, wb):
-    """GJK: ``(inside, n, v, pa, pb)``, the simplex's ``n`` points left in ``w``.
+def _gjk(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, scratch):
+    """GJK: ``(inside, n, v, pa, pb)``, the simplex's ``n`` points left in ``scratch.simplex``.
 
     ``inside``: the origin is in ``A - B`` (or within round-off of it); else ``v = pa - pb``
     is ``A - B``'s closest point to the origin, ``pa`` and ``pb`` the shapes' closest points.
     """
-    weights = np.zeros(4)
-    edges, g = np.zeros((3, 3)), np.zeros((3, 3))
-    index, rhs = np.zeros(3, dtype=np.int64), np.zeros(3)
+    w, wa, wb = scratch.simplex, scratch.simplex_a, scratch.simplex_b
+    weights, edges, g = scratch.weights, scratch.edges, scratch.gram
+    index, rhs = scratch.index, scratch.rhs
+    for array in (weights, rhs):   # zeros, as each pair found them when they were its own
+        array[:] = 0.0
+    for array in (edges, g):
+        array[:] = 0.0
+    index[:] = 0
     v = kin.plus_scaled(ca, -1.0, cb)
     if kin.dot(v, v) == 0.0:
         v = (1.0, 0.0, 0.0)
@@ -270,19 +312,15 @@ def _full_tetrahedron(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, w, wa, wb,
 
 
 @helper
-def _epa(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, tetrahedron, ta, tb):
-    """EPA from a tetrahedron about the origin: depth, unit normal of ``D`` (outward), pa, pb."""
-    vertices = np.empty((4 + EPA_STEPS, 3))
-    va = np.empty((4 + EPA_STEPS, 3))
-    vb = np.empty((4 + EPA_STEPS, 3))
-    faces = np.empty((FACES, 3), dtype=np.int64)
-    normals = np.empty((FACES, 3))
-    distances = np.empty(FACES)
-    alive = np.zeros(FACES, dtype=np.bool_)
-    edges = np.empty((3 * FACES, 2), dtype=np.int64)
-    vertices[:4] = tetrahedron[:4]
-    va[:4] = ta[:4]
-    vb[:4] = tb[:4]
+def _epa(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, scratch):
+    """EPA from GJK's tetrahedron about the origin: depth, outward unit normal of ``D``, pa, pb."""
+    vertices, va, vb = scratch.vertices, scratch.vertices_a, scratch.vertices_b
+    faces, normals, distances = scratch.faces, scratch.normals, scratch.distances
+    alive, edges = scratch.alive, scratch.horizon
+    alive[:] = False
+    vertices[:4] = scratch.simplex[:4]
+    va[:4] = scratch.simplex_a[:4]
+    vb[:4] = scratch.simplex_b[:4]
     for f, (i, j, k, opposite) in enumerate(((0, 1, 2, 3), (0, 3, 1, 2), (0, 2, 3, 1),
                                              (1, 3, 2, 0))):
         _face(vertices, faces, normals, distances, f, i, j, k)
@@ -396,21 +434,22 @@ def _own_points(contacts, count, a, b, slots, margin, kind, size, centre, r, oth
 
 @helper
 def convex_pair(contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
-                cb, rb):
-    """Two convex shapes: the deepest contact by GJK/EPA (feature 0), then their own points."""
-    w, wa, wb = np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3))
-    inside, n, v, pa, pb = _gjk(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, w, wa, wb)
+                cb, rb, scratch):
+    """Two convex shapes: the deepest contact by GJK/EPA (feature 0), then their own points.
+
+    ``scratch`` is the :class:`ConvexScratch` GJK and EPA work in.
+    """
+    inside, n, v, pa, pb = _gjk(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, scratch)
     if not inside:
         distance = math.sqrt(kin.dot(v, v))
         if distance >= margin:
             return count
         normal = kin.scaled(1.0 / distance, v)   # from b to a
     else:
-        if _full_tetrahedron(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, w, wa, wb,
-                             n) < 4:
+        if _full_tetrahedron(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, scratch.simplex,
+                             scratch.simplex_a, scratch.simplex_b, n) < 4:
             return count   # A - B is flat (a degenerate shape): no depth to find
-        depth, outward, pa, pb = _epa(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, w, wa,
-                                      wb)
+        depth, outward, pa, pb = _epa(kind_a, size_a, ca, ra, kind_b, size_b, cb, rb, scratch)
         if depth == -math.inf:
             return count
         distance, normal = -depth, kin.scaled(-1.0, outward)

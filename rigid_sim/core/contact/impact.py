@@ -14,7 +14,7 @@ from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.contact.narrow import box_box_gap, sphere_box_contact
 from rigid_sim.core.contact.solver import relative_velocity
 from rigid_sim.core.contact.stage import (
-    contact_row, detect, SPHERE, solve_impulses, sort_by_key)
+    contact_row, detect, keep_detection, SPHERE, solve_impulses, sort_by_key)
 
 
 @helper
@@ -120,6 +120,7 @@ def struck_pairs(start, end, model, parameters, work):
                 work.struck[struck, 0], work.struck[struck, 1] = a, b
                 struck += 1
     if struck == 0:
+        keep_detection(end, work, count, pairs)   # the stage runs on ``end`` next
         return count, pairs, 0
     # Round-off can make the gap's sign and the contacts' disagree: both ends are checked
     # by the gap, which the root finder reads.

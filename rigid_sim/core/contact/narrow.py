@@ -179,7 +179,7 @@ def _clip(polygon, size, out, direction, limit):
 
 @helper
 def _face_patch(contacts, count, a, b, slots, margin, reference, incident, centres, axes,
-                halves, face, code, flip):
+                halves, face, code, flip, clip):
     """Clip the incident box's face against the reference face ``face`` of ``reference``.
 
     ``centres``, ``axes`` and ``halves`` are indexed by box (0: a, 1: b); ``flip``: the
@@ -200,8 +200,7 @@ def _face_patch(contacts, count, a, b, slots, margin, reference, incident, centr
     out_normal = kin.scaled(-1.0 if along > 0.0 else 1.0, inc_axes[best])
     inc_centre = kin.plus_scaled(inc_c, inc_half[best], out_normal)
     u, v = (best + 1) % 3, (best + 2) % 3
-    polygon = np.empty((8, 3))
-    scratch = np.empty((8, 3))
+    polygon, scratch = clip[0], clip[1]
     signs = ((1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))
     for k in range(4):
         corner = kin.plus_scaled(inc_centre, signs[k][0] * inc_half[u], inc_axes[u])
@@ -258,12 +257,13 @@ def _edge_contact(contacts, count, a, b, slots, centres, axes, halves, i, j, nor
 
 @helper
 def box_box(contacts, count, a, b, slots, margin, centre_a, r_a, half_a, centre_b, r_b,
-            half_b):
+            half_b, clip):
     """Two boxes by the separating axis test, then a contact patch or an edge contact.
 
     The 15 axes (3 faces each, 9 edge pairs); the one of least overlap is the normal. A face
     axis clips the other box's most opposed face against the face's side planes (up to 8
     points); an edge pair gives the point between the closest points of the two edges.
+    ``clip`` (2, 8, 3) is the clipping's scratch: the polygon and its next cut.
     """
     axes_a = (axis(r_a, 0), axis(r_a, 1), axis(r_a, 2))
     axes_b = (axis(r_b, 0), axis(r_b, 1), axis(r_b, 2))
@@ -300,7 +300,7 @@ def box_box(contacts, count, a, b, slots, margin, centre_a, r_a, half_a, centre_
                              edge_j, normal, best_edge)
     incident = 1 - face_box
     return _face_patch(contacts, count, a, b, slots, margin, face_box, incident, centres,
-                       axes, halves, face_k, 3 * face_box + face_k, face_box == 0)
+                       axes, halves, face_k, 3 * face_box + face_k, face_box == 0, clip)
 
 
 @helper

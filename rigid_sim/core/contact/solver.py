@@ -85,53 +85,108 @@ def relative_velocity(velocity, a, b, arm_a, arm_b):
     return v
 
 
-@helper(inline='always')
-def _push(velocity, impulse, inverse_mass, inv_inertia, i, arm, j, sliding):
-    """Apply the impulse ``j`` at ``arm`` to body ``i``: its velocities and (if kept) sums.
+# Columns of a contact's row (``rows``, (C, ROW)) that a sweep reads. Per direction
+# ``u`` (the normal, tangent 1, tangent 2): ``arm x u`` of body a then b (its angular
+# Jacobian), and the inverse world inertia times it (the turn a unit impulse along ``u``
+# gives each body). Made once per step in the stage's row set-up, so a row's update costs
+# dot products and scaled adds, not the crosses and matrix products of the arms: those
+# were most of a sweep (a stack of 10 boxes runs 600 sweeps a step).
+NORMAL, TANGENT_1, TANGENT_2 = 6, 9, 12   # the unit directions, world
+MOMENT = 24   # arm x u: a (3), then b (3), for the normal, tangent 1, tangent 2 in turn
+TURN = 42     # I^-1 (arm x u) likewise
+ROW = 60
 
-    ``impulse`` (N, 9) sums the linear and angular impulses, then the linear impulse of
-    friction alone (``sliding``); an empty one keeps none.
+
+@helper
+def store_jacobians(rows, s, inv_inertia, a, b, arm_a, arm_b, u, moment, turn):
+    """Write ``arm x u`` and ``I^-1 (arm x u)`` of bodies ``a`` and ``b`` (if any) into row ``s``.
+
+    ``moment`` and ``turn`` are the first columns of each: a's three, then b's (zero for a
+    plane, which no sweep reads).
     """
-    moment = kin.cross(arm, j)
-    turn = kin.rotate(kin.entries(inv_inertia, i), moment)
-    for k in range(3):
-        velocity[i, k] += inverse_mass[i] * j[k]
-        velocity[i, 3 + k] += turn[k]
-    if impulse.shape[0] > 0:
-        for k in range(3):
-            impulse[i, k] += j[k]
-            impulse[i, 3 + k] += moment[k]
-            if sliding:
-                impulse[i, 6 + k] += j[k]
+    for k, (i, arm) in enumerate(((a, arm_a), (b, arm_b))):
+        m, t = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+        if i >= 0:
+            m = kin.cross(arm, u)
+            t = kin.rotate(kin.entries(inv_inertia, i), m)
+        kin.store(rows, s, moment + 3 * k, m)
+        kin.store(rows, s, turn + 3 * k, t)
 
 
 @helper(inline='always')
-def apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, sliding):
-    """Apply ``j`` to ``a`` and ``-j`` to ``b`` (none for a plane) at their arms.
-
-    ``impulse`` (N, 9) sums each body's linear and angular impulse, then (``sliding``:
-    ``j`` is friction) friction's linear impulse alone; an empty one keeps none (the
-    pseudo-velocities of the position correction).
-    """
-    _push(velocity, impulse, inverse_mass, inv_inertia, a, arm_a, j, sliding)
+def _speed_along(rows, s, velocity, a, b, u, moment):
+    """Relative velocity at contact ``s`` along its direction ``u``, by its row's Jacobian."""
+    speed = (kin.dot(kin.vector(rows, s, u), kin.vector(velocity, a, 0))
+             + kin.dot(kin.vector(rows, s, moment), kin.vector(velocity, a, 3)))
     if b >= 0:
-        _push(velocity, impulse, inverse_mass, inv_inertia, b, arm_b, kin.scaled(-1.0, j),
-              sliding)
+        speed -= (kin.dot(kin.vector(rows, s, u), kin.vector(velocity, b, 0))
+                  + kin.dot(kin.vector(rows, s, moment + 3), kin.vector(velocity, b, 3)))
+    return speed
 
 
 @helper(inline='always')
-def friction_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, mu, body, lam):
+def _impel(velocity, inverse_mass, i, sign, j, turn):
+    """Change body ``i``'s velocities by ``sign`` times the linear impulse ``j`` and ``turn``."""
+    for k in range(3):
+        velocity[i, k] += sign * inverse_mass[i] * j[k]
+        velocity[i, 3 + k] += sign * turn[k]
+
+
+@helper(inline='always')
+def _along_row(rows, s, column, c_n, c_1, c_2):
+    """``c_n u_n + c_1 u_1 + c_2 u_2``, the vectors ``u`` at ``column``, +6, +12 of row ``s``."""
+    return kin.add(kin.scaled(c_n, kin.vector(rows, s, column)),
+                   kin.add(kin.scaled(c_1, kin.vector(rows, s, column + 6)),
+                           kin.scaled(c_2, kin.vector(rows, s, column + 12))))
+
+
+@helper
+def warm_start(rows, s, velocity, inverse_mass, body, lam):
+    """Change the velocities by contact ``s``'s impulse ``lam[s]`` (normal, two tangential)."""
+    j = kin.add(kin.scaled(lam[s, 0], kin.vector(rows, s, NORMAL)),
+                kin.add(kin.scaled(lam[s, 1], kin.vector(rows, s, TANGENT_1)),
+                        kin.scaled(lam[s, 2], kin.vector(rows, s, TANGENT_2))))
+    for k, (i, sign) in enumerate(((body[s, 0], 1.0), (body[s, 1], -1.0))):
+        if i >= 0:
+            turn = _along_row(rows, s, TURN + 3 * k, lam[s, 0], lam[s, 1], lam[s, 2])
+            _impel(velocity, inverse_mass, i, sign, j, turn)
+
+
+@helper
+def impulse_sums(rows, body, lam, count, impulse):
+    """Each body's impulse (N, 9) from the first ``count`` contacts' impulses ``lam``.
+
+    Linear and angular (about the centre of mass), then friction's linear impulse alone.
+    Summed once from the solve's end impulses, where summing each sweep's changes (the
+    same total) was a third of a sweep's memory traffic.
+    """
+    impulse[...] = 0.0
+    for s in range(count):
+        friction = kin.add(kin.scaled(lam[s, 1], kin.vector(rows, s, TANGENT_1)),
+                           kin.scaled(lam[s, 2], kin.vector(rows, s, TANGENT_2)))
+        j = kin.add(kin.scaled(lam[s, 0], kin.vector(rows, s, NORMAL)), friction)
+        for k, (i, sign) in enumerate(((body[s, 0], 1.0), (body[s, 1], -1.0))):
+            if i >= 0:
+                moment = _along_row(rows, s, MOMENT + 3 * k, lam[s, 0], lam[s, 1], lam[s, 2])
+                for c in range(3):
+                    impulse[i, c] += sign * j[c]
+                    impulse[i, 3 + c] += sign * moment[c]
+                    impulse[i, 6 + c] += sign * friction[c]
+
+
+@helper(inline='always')
+def friction_row(rows, s, velocity, inverse_mass, mu, body, lam):
     """One Gauss-Seidel update of contact ``s``'s tangential impulse, kept in the cone.
 
-    ``rows`` (C, 24): arm a, arm b, normal, tangent 1, tangent 2, the tangential mass, two
+    ``rows`` (C, ROW): arm a, arm b, normal, tangent 1, tangent 2, the tangential mass, two
     spare, the normal mass, the normal target, the approach speed, the distance, the rigid
-    normal mass, the correction's target. Returns the largest change of a component, N s.
+    normal mass, the correction's target, then the Jacobians (:data:`MOMENT`, :data:`TURN`).
+    Returns the largest change of a component, N s.
     """
     a, b = body[s, 0], body[s, 1]
-    arm_a, arm_b = kin.vector(rows, s, 0), kin.vector(rows, s, 3)
-    t1, t2 = kin.vector(rows, s, 9), kin.vector(rows, s, 12)
-    v = relative_velocity(velocity, a, b, arm_a, arm_b)
-    v1, v2 = kin.dot(t1, v), kin.dot(t2, v)
+    t1, t2 = kin.vector(rows, s, TANGENT_1), kin.vector(rows, s, TANGENT_2)
+    v1 = _speed_along(rows, s, velocity, a, b, TANGENT_1, MOMENT + 6)
+    v2 = _speed_along(rows, s, velocity, a, b, TANGENT_2, MOMENT + 12)
     # One step against the slip, of the largest mobility's inverse: it stops the slip along
     # that direction and under-steps the other, so sweeps converge; on the disc's edge the
     # result stays against the slip (maximal dissipation), where a 2x2 solve of an
@@ -145,13 +200,16 @@ def friction_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, mu, body
     d1, d2 = l1 - lam[s, 1], l2 - lam[s, 2]
     lam[s, 1], lam[s, 2] = l1, l2
     j = kin.add(kin.scaled(d1, t1), kin.scaled(d2, t2))
-    apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b, j, True)
+    for k, (i, sign) in enumerate(((a, 1.0), (b, -1.0))):
+        if i >= 0:
+            turn = kin.add(kin.scaled(d1, kin.vector(rows, s, TURN + 6 + 3 * k)),
+                           kin.scaled(d2, kin.vector(rows, s, TURN + 12 + 3 * k)))
+            _impel(velocity, inverse_mass, i, sign, j, turn)
     return max(abs(d1), abs(d2))
 
 
 @helper(inline='always')
-def normal_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, softness, body, lam,
-               target):
+def normal_row(rows, s, velocity, inverse_mass, softness, body, lam, target):
     """One Gauss-Seidel update of contact ``s``'s normal impulse toward ``target``, kept >= 0.
 
     ``softness`` is the compliance over the step squared, (m/s) per (N s): a soft contact
@@ -159,11 +217,14 @@ def normal_row(rows, s, velocity, impulse, inverse_mass, inv_inertia, softness, 
     Returns the size of the change, N s.
     """
     a, b = body[s, 0], body[s, 1]
-    arm_a, arm_b, n = kin.vector(rows, s, 0), kin.vector(rows, s, 3), kin.vector(rows, s, 6)
-    vn = kin.dot(n, relative_velocity(velocity, a, b, arm_a, arm_b))
-    new = max(0.0, lam[s, 0] - (vn + softness * lam[s, 0] - target) * rows[s, 18])
-    change = new - lam[s, 0]
-    lam[s, 0] = new
-    apply(velocity, impulse, inverse_mass, inv_inertia, a, b, arm_a, arm_b,
-          kin.scaled(change, n), False)
+    vn = _speed_along(rows, s, velocity, a, b, NORMAL, MOMENT)
+    # The change, not the new impulse, is what the velocities wait for: it is clipped at
+    # -lam directly (the impulse stays >= 0) rather than read back off the clipped sum.
+    change = max(-lam[s, 0], (target - vn - softness * lam[s, 0]) * rows[s, 18])
+    lam[s, 0] += change
+    j = kin.scaled(change, kin.vector(rows, s, NORMAL))
+    for k, (i, sign) in enumerate(((a, 1.0), (b, -1.0))):
+        if i >= 0:
+            _impel(velocity, inverse_mass, i, sign, j,
+                   kin.scaled(change, kin.vector(rows, s, TURN + 3 * k)))
     return abs(change)

@@ -22,10 +22,9 @@ from rigid_sim.core.contact.broad import overlapping_pairs
 from rigid_sim.core.contact.kinds import ShapeKinds
 from rigid_sim.core.contact.narrow import BOX, CAPSULE, CYLINDER, SPHERE
 from rigid_sim.core.contact.solver import (
-    apply, coupling, friction_row, normal_row, relative_velocity, tangents,
-    world_inverse_inertia)
+    coupling, friction_row, impulse_sums, MOMENT, normal_row, relative_velocity,
+    store_jacobians, tangents, TURN, warm_start, world_inverse_inertia)
 
-ROW = 24             # width of a contact's row of solver constants
 # A solve stops at the sweep whose largest change of an impulse is at most this fraction of
 # the largest impulse: further sweeps would change the velocities by round-off only.
 CONVERGED = 1e-12
@@ -59,7 +58,7 @@ class ContactWork(NamedTuple):
     active: np.ndarray     # (N,) bool: has a collision shape
     inertia: np.ndarray    # (N, 3, 3) world inverse inertia, 1/(kg m^2)
     velocity: np.ndarray   # (N, 6) linear and angular velocity
-    impulse: np.ndarray    # (N, 9) this step's linear and angular impulse, N s, N m s;
+    impulse: np.ndarray    # (N, 9) the solve's linear and angular impulse, N s, N m s;
     # then friction's linear impulse alone
     pseudo: np.ndarray     # (N, 6) position-correction velocities
     pairs: np.ndarray      # (M, 2) int
@@ -69,11 +68,16 @@ class ContactWork(NamedTuple):
     body: np.ndarray       # (C, 2) int bodies, in key order
     lam: np.ndarray        # (C, 3) normal and tangential impulse, N s, in key order
     push: np.ndarray       # (C, 1) position-correction impulse
-    none: np.ndarray       # (0, 9): the pseudo-solve keeps no impulse sums
     last_key: np.ndarray   # (C,) int: the last step's keys, sorted
     last_lam: np.ndarray   # (C, 3) and their impulses
     last_count: np.ndarray  # (1,) int
     struck: np.ndarray     # (C, 2) int: pairs struck within a step (mode: exact)
+    clip: np.ndarray       # (2, 8, 3): a box-box face patch's polygon and its next cut
+    detected: np.ndarray   # (N, 13) in exact mode, else (0, 13): the state struck_pairs
+    # left its detection of in this scratch, which contact_step then reads (see reuse)
+    reuse: np.ndarray      # (3,) int: 1 while that detection is what the scratch holds, its
+    # contacts and pairs
+    convex: convex.ConvexScratch   # GJK's and EPA's (empty without cylinders)
 
 
 @helper
@@ -88,8 +92,6 @@ def _shapes(y, model, parameters, work):
             work.inertia[i, k // 3, k % 3] = inertia[k]
         kin.store(work.velocity, i, 0, kin.scaled(model.inverse_mass[i], p))
         kin.store(work.velocity, i, 3, kin.rotate(inertia, big_l))
-        for k in range(9):
-            work.impulse[i, k] = 0.0
         for k in range(6):
             work.pseudo[i, k] = 0.0
         centre = kin.add(x, kin.rotate(r, kin.vector(parameters.offset, i, 0)))
@@ -155,8 +157,8 @@ def _plane_contacts_for(shapes, parameters, work, slots):
     return plane_contacts
 
 
-def _pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
-          cb, rb, flip):
+def _pair(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b, cb,
+          rb, flip):
     """One pair's narrow phase, ``kind_a <= kind_b``; ``flip``: they were swapped for it.
 
     A swapped pair writes ``b`` first and its normals point the other way, as
@@ -166,13 +168,14 @@ def _pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, 
 
 
 @overload(_pair)
-def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
-              size_b, cb, rb, flip):
+def _pair_for(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
+              cb, rb, flip):
     # Constants of the closure: numba prunes a branch on a false one before typing its callee.
     capsules, cylinders = CAPSULE in shapes.kinds, CYLINDER in shapes.kinds
 
-    def pair(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b,
-             size_b, cb, rb, flip):
+    def pair(shapes, work, count, a, b, slots, margin, kind_a, size_a, ca, ra, kind_b, size_b,
+             cb, rb, flip):
+        contacts = work.contacts
         first, second = (b, a) if flip else (a, b)
         if kind_a == SPHERE and kind_b == SPHERE:
             return narrow.sphere_sphere(contacts, count, first, second, slots, margin, ca,
@@ -182,7 +185,7 @@ def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, 
                                      size_a[0], cb, rb, size_b, flip)
         if kind_a == BOX and kind_b == BOX:
             return narrow.box_box(contacts, count, first, second, slots, margin, ca, ra,
-                                  size_a, cb, rb, size_b)
+                                  size_a, cb, rb, size_b, work.clip)
         if capsules and kind_b == CAPSULE:
             axis_b = narrow.axis(rb, 2)
             if kind_a == SPHERE:
@@ -204,16 +207,16 @@ def _pair_for(shapes, contacts, count, a, b, slots, margin, kind_a, size_a, ca, 
         # A cylinder with a box, a capsule or a cylinder: by their support mappings.
         if flip:
             return convex.convex_pair(contacts, count, first, second, slots, margin, kind_b,
-                                      size_b, cb, rb, kind_a, size_a, ca, ra)
+                                      size_b, cb, rb, kind_a, size_a, ca, ra, work.convex)
         return convex.convex_pair(contacts, count, first, second, slots, margin, kind_a,
-                                  size_a, ca, ra, kind_b, size_b, cb, rb)
+                                  size_a, ca, ra, kind_b, size_b, cb, rb, work.convex)
     return pair
 
 
 @helper
 def _pair_contacts(parameters, work, pairs, count, slots):
     """Run the narrow phase of each of the first ``pairs`` pairs, after ``count`` contacts."""
-    contacts, kind, size = work.contacts, parameters.kind, parameters.size
+    kind, size = parameters.kind, parameters.size
     margin, shapes = parameters.margin, parameters.shapes
     for k in range(pairs):
         a, b = work.pairs[k, 0], work.pairs[k, 1]
@@ -221,16 +224,16 @@ def _pair_contacts(parameters, work, pairs, count, slots):
         ra, rb = kin.entries(work.rotation, a), kin.entries(work.rotation, b)
         sa, sb = kin.vector(size, a, 0), kin.vector(size, b, 0)
         if kind[a] <= kind[b]:
-            count = _pair(shapes, contacts, count, a, b, slots, margin, kind[a], sa, ca, ra,
+            count = _pair(shapes, work, count, a, b, slots, margin, kind[a], sa, ca, ra,
                           kind[b], sb, cb, rb, False)
         else:
-            count = _pair(shapes, contacts, count, b, a, slots, margin, kind[b], sb, cb, rb,
+            count = _pair(shapes, work, count, b, a, slots, margin, kind[b], sb, cb, rb,
                           kind[a], sa, ca, ra, True)
     return count
 
 
 @helper
-def _warm_start(work, key):
+def _last_row(work, key):
     """Find the last step's row of the contact with ``key`` (-1: none), by binary search."""
     low, high = 0, work.last_count[0]
     while low < high:
@@ -260,6 +263,8 @@ def contact_row(y, model, parameters, work, s, c, softness):
     t1, t2 = tangents(n)
     for k, v in enumerate((arm_a, arm_b, n, t1, t2)):
         kin.store(rows, s, 3 * k, v)
+    for k, u in enumerate((n, t1, t2)):
+        store_jacobians(rows, s, inertia, a, b, arm_a, arm_b, u, MOMENT + 6 * k, TURN + 6 * k)
     m = model.inverse_mass
     k11 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t1)
     k12 = coupling(m, inertia, a, b, arm_a, arm_b, t1, t2)
@@ -276,7 +281,7 @@ def contact_row(y, model, parameters, work, s, c, softness):
 @helper
 def _set_up(y, model, parameters, work, count, h):
     """Each contact's row of constants, in key order, and its warm-started impulse."""
-    contacts, rows, inertia = work.contacts, work.rows, work.inertia
+    contacts, rows = work.contacts, work.rows
     m = model.inverse_mass
     for s in range(count):
         c = work.order[s]
@@ -296,16 +301,10 @@ def _set_up(y, model, parameters, work, count, h):
             rows[s, 19] = -parameters.restitution * approach if bounces else closing
         rows[s, 20] = approach
         rows[s, 21] = distance
-        last = _warm_start(work, contacts.key[c])
+        last = _last_row(work, contacts.key[c])
         for k in range(3):
             work.lam[s, k] = work.last_lam[last, k] if last >= 0 else 0.0
-        a, b = work.body[s, 0], work.body[s, 1]
-        arm_a, arm_b = kin.vector(rows, s, 0), kin.vector(rows, s, 3)
-        n, t1, t2 = kin.vector(rows, s, 6), kin.vector(rows, s, 9), kin.vector(rows, s, 12)
-        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b,
-              kin.scaled(work.lam[s, 0], n), False)
-        friction = kin.add(kin.scaled(work.lam[s, 1], t1), kin.scaled(work.lam[s, 2], t2))
-        apply(work.velocity, work.impulse, m, inertia, a, b, arm_a, arm_b, friction, True)
+        warm_start(rows, s, work.velocity, m, work.body, work.lam)
 
 
 @helper
@@ -314,7 +313,7 @@ def solve_impulses(model, parameters, work, count, softness):
 
     ``softness`` is the compliance over the step squared (0 at an instant).
     """
-    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    rows, m = work.rows, model.inverse_mass
     # Sweeps of the normal impulses alone first: friction then starts from the weights
     # the contacts carry, not from the rotations a first sweep's uneven pushes make. Each
     # solve stops at the sweep that changes no impulse by more than CONVERGED of the
@@ -322,27 +321,28 @@ def solve_impulses(model, parameters, work, count, softness):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
-                                            softness, work.body, work.lam, rows[s, 19]))
+            change = max(change, normal_row(rows, s, work.velocity, m, softness, work.body,
+                                            work.lam, rows[s, 19]))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.velocity, work.impulse, m, inertia,
-                                            softness, work.body, work.lam, rows[s, 19]))
-            change = max(change, friction_row(rows, s, work.velocity, work.impulse, m, inertia,
-                                              parameters.friction, work.body, work.lam))
+            change = max(change, normal_row(rows, s, work.velocity, m, softness, work.body,
+                                            work.lam, rows[s, 19]))
+            change = max(change, friction_row(rows, s, work.velocity, m, parameters.friction,
+                                              work.body, work.lam))
             largest = max(largest, work.lam[s, 0])
         if change <= CONVERGED * largest:
             break
+    impulse_sums(rows, work.body, work.lam, count, work.impulse)
 
 
 @helper
 def _solve(model, parameters, work, count, h):
     """Gauss-Seidel sweeps of the impulses, then of the position correction."""
-    rows, m, inertia = work.rows, model.inverse_mass, work.inertia
+    rows, m = work.rows, model.inverse_mass
     solve_impulses(model, parameters, work, count, parameters.compliance / (h * h))
     # The penetration is removed within the step.
     for s in range(count):
@@ -352,8 +352,8 @@ def _solve(model, parameters, work, count, h):
     for _ in range(parameters.iterations):
         change, largest = 0.0, 0.0
         for s in range(count):
-            change = max(change, normal_row(rows, s, work.pseudo, work.none, m, inertia, 0.0,
-                                            work.body, work.push, rows[s, 23]))
+            change = max(change, normal_row(rows, s, work.pseudo, m, 0.0, work.body, work.push,
+                                            rows[s, 23]))
             largest = max(largest, work.push[s, 0])
         if change <= CONVERGED * largest:
             break
@@ -396,12 +396,38 @@ def detect(y, model, parameters, work):
     contacts were not all written.
     """
     slots = y.shape[0] + parameters.planes.shape[0]
+    work.reuse[0] = 0   # the scratch is being overwritten: what it held is gone
     _shapes(y, model, parameters, work)
     count = _plane_contacts(parameters.shapes, parameters, work, slots)
     pairs = overlapping_pairs(work.low, work.high, work.active, work.pairs)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
     return _pair_contacts(parameters, work, pairs, count, slots), pairs
+
+
+@helper
+def keep_detection(y, work, count, pairs):
+    """Say the scratch holds the detection of ``y`` (exact mode): ``count`` contacts, ``pairs``.
+
+    Exact mode's check of a step (``impact.struck_pairs``) detects the state the step ended
+    at; when nothing was struck, the velocity-level stage runs on that same state next and
+    reads this detection instead of making it again.
+    """
+    work.detected[...] = y
+    work.reuse[0], work.reuse[1], work.reuse[2] = 1, count, pairs
+
+
+@helper
+def _kept_detection(y, work):
+    """Whether the scratch holds the detection of ``y``: the state kept, to the bit."""
+    if work.reuse[0] == 0 or work.detected.shape != y.shape:
+        return False
+    for i in range(y.shape[0]):
+        for k in range(y.shape[1]):
+            a, b = y[i, k], work.detected[i, k]
+            if a != b or math.copysign(1.0, a) != math.copysign(1.0, b):
+                return False
+    return True
 
 
 @helper
@@ -419,7 +445,11 @@ def contact_step(y, model, parameters, h, work):
     Returns ``(contacts, pairs)``: how many of each were found. When either is above the
     room of ``work`` nothing was changed: the caller grows ``work`` and calls again.
     """
-    count, pairs = detect(y, model, parameters, work)
+    if _kept_detection(y, work):
+        count, pairs = work.reuse[1], work.reuse[2]
+        work.reuse[0] = 0   # read once: the solve below changes the scratch's velocities
+    else:
+        count, pairs = detect(y, model, parameters, work)
     if pairs > work.pairs.shape[0] or count > work.order.shape[0]:
         return count, pairs
     sort_by_key(work, count)
