@@ -27,6 +27,10 @@ from time import monotonic, perf_counter
 
 from rclpy.clock import Clock, ClockType
 
+from rigid_sim.deferred import REQUEST_QUEUE_DEPTH
+
+# Step jobs that may wait at once: as many calls as a service keeps in its queue.
+MAX_QUEUED_JOBS = REQUEST_QUEUE_DEPTH
 MAX_LAG = 0.1    # s of wall time the simulation may fall behind before ticks are given up
 # s of wall time of ticks in one executor round: control is answered between two slices,
 # so this (plus one tick) bounds its latency, well under the 100 ms the node promises.
@@ -124,7 +128,15 @@ class TickLoop:
         self.timer.cancel()
 
     def run_job(self, job):
-        """Queue ``job``; its ticks run in slices after those of the jobs before it."""
+        """Queue ``job``; its ticks run in slices after those of the jobs before it.
+
+        Refused (ended at once, saying why) when MAX_QUEUED_JOBS wait already: each holds an
+        unanswered call, and a client that kept calling would queue them without end.
+        """
+        if len(self.jobs) >= MAX_QUEUED_JOBS:
+            job.finish(f'refused: {len(self.jobs)} step calls wait already, at most '
+                       f'{MAX_QUEUED_JOBS}')
+            return
         self.jobs.append(job)
         self._job_timer.reset()
 

@@ -77,6 +77,28 @@ def test_a_burst_of_a_thousand_step_calls_is_answered_in_full(rigid_sim):
     assert abs(sim.time - REQUEST_QUEUE_DEPTH * 0.001) < 1e-9
 
 
+def test_step_calls_beyond_the_queue_bound_are_refused_saying_why(rigid_sim, monkeypatch):
+    """Each waiting ``~/step`` holds an unanswered call: past the bound one is refused at once.
+
+    Bound 3 here (1000 in the node): of five calls sent at once, three run their ticks and two
+    are answered at once, refused, with the reason; the simulated time is three calls' worth.
+    """
+    monkeypatch.setattr('rigid_sim.tick_loop.MAX_QUEUED_JOBS', 3)
+    sim = rigid_sim(yaml=BODIES, start_paused=True, time_step=0.001, step_ticks=200,
+                    substeps=50)   # 0.2 million body-substeps a call: the calls queue
+    client = sim.create_node('client').create_client(Trigger, sim.topic('step'),
+                                                     qos_profile=SERVICE_QOS)
+    spin_until(sim.executor, client.service_is_ready, what='service step')
+    calls = [client.call_async(Trigger.Request()) for _ in range(5)]
+    spin_until(sim.executor, lambda: all(call.done() for call in calls),
+               what='every step answered', timeout=120.0)
+    answers = [call.result() for call in calls]
+    refused = [a.message for a in answers if not a.success]
+    assert sum(a.success for a in answers) == 3 and len(refused) == 2
+    assert all('refused: 3 step calls wait already, at most 3' in m for m in refused), refused
+    assert abs(sim.time - 3 * 200 * 0.001) < 1e-9
+
+
 def test_the_clock_and_parameters_go_on_while_a_change_is_prepared(
         rigid_sim_context, write_scene):
     """An integrator change whose preparation (compiling) blocks: ticks and calls go on.

@@ -306,6 +306,27 @@ def _goal(steps):
     return SimulateSteps.Goal(steps=steps)
 
 
+def test_simulate_steps_runs_one_goal_at_a_time(stopped):
+    """A second goal while one runs is rejected (each wakes the executor every 5 ms)."""
+    sim = stopped
+    running = sim.action.send_goal_async(_goal(10 ** 6))
+    sim.until(running.done, 'first goal answered')
+    assert running.result().accepted
+    second = sim.action.send_goal_async(_goal(3))
+    sim.until(second.done, 'second goal answered')
+    assert not second.result().accepted
+    cancel = running.result().cancel_goal_async()
+    sim.until(cancel.done, 'cancel answered')
+    outcome = running.result().get_result_async()
+    sim.until(outcome.done, 'cancelled result')
+    third = sim.action.send_goal_async(_goal(3))
+    sim.until(third.done, 'third goal answered')
+    assert third.result().accepted
+    outcome = third.result().get_result_async()
+    sim.until(outcome.done, 'result')
+    assert outcome.result().result.result.result == OK
+
+
 def test_simulate_steps_while_playing_is_aborted_as_operation_failed(stopped):
     sim, s = stopped, SimulationState
     assert sim.call('set_simulation_state', state=s(state=s.STATE_PLAYING)).result.result == OK
