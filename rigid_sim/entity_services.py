@@ -45,6 +45,9 @@ NO_RE2 = ('name filters need RE2 (linear-time POSIX regular expressions): pip in
 # Bytes RE2 may use for one compiled filter (its default is 8 MiB): a bigger program is
 # refused at compile, as RE2 refuses repetitions above 1000 in all (a{1000}{1000}).
 FILTER_MEMORY = 1 << 20
+# Answers too big for one slice that may be in the making at once; one more is refused
+# before any work. Each holds a snapshot of every body (13 numbers each) until it is sent.
+MAX_BUILDING = 64
 
 
 def _filter_options():
@@ -146,13 +149,21 @@ class EntityServices:
         if isinstance(pattern, tuple):
             response.result = result(*pattern)     # no entity on a refusal
             return response
+        if self._builds.full:
+            response.result = result(si_msg.Result.RESULT_OPERATION_FAILED,
+                                     self._builds.refusal())
+            return response
         world = self._node.world
         # The snapshot: the names and, for states, every body frame at once, now.
         frames = frame_rows(world.bodies, world.y)[:, :13] if with_states else None
         limit = self._node.settings.max_answer_states if with_states else None
         answer = EntitiesAnswer(response, list(world.bodies.names), pattern, frames,
                                 self._node.settings.world_frame, world.time, reply, limit)
-        return response if answer.run(perf_counter() + SLICE) else self._builds.add(answer)
+        # Behind answers in the making it waits its turn, with no slice of its own now: a
+        # burst of calls, each worked on for a slice as it came, held control for seconds.
+        if self._builds.idle and answer.run(perf_counter() + SLICE):
+            return response
+        return self._builds.add(answer)
 
     def _on_entities(self, request, response, reply):
         return self._answer(request, response, reply, with_states=False)
@@ -311,8 +322,27 @@ class SlicedBuilds:
         self._timer = node.create_timer(0.0, self._on_timer, clock=steady)
         self._timer.cancel()
 
+    @property
+    def idle(self):
+        """Return whether no answer is in the making."""
+        return not self._queue
+
+    @property
+    def full(self):
+        """Return whether MAX_BUILDING answers are in the making: one more is refused.
+
+        A client that kept asking queued them without end: 300 answers of 2000 states at
+        once grew the node by 290 MB.
+        """
+        return len(self._queue) >= MAX_BUILDING
+
+    def refusal(self):
+        """Return why a call is refused while the queue is full."""
+        return (f'{len(self._queue)} answers are being built, at most {MAX_BUILDING} at once: '
+                'ask again when one is sent')
+
     def add(self, build):
-        """Queue ``build`` (a started :class:`EntitiesAnswer`); LATER, its callback's answer."""
+        """Queue ``build`` (an :class:`EntitiesAnswer`); LATER, its callback's answer."""
         self._queue.append(build)
         self._timer.reset()
         return deferred.LATER

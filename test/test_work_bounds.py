@@ -221,3 +221,36 @@ def test_get_entities_states_refuses_more_states_than_one_answer_may_carry(rigid
     assert [s.pose.position.x for s in two.states] == [1.0, 2.0]
     sim.set_parameters(max_answer_states=3)
     assert [s.pose.position.x for s in states().states] == [1.0, 2.0, 3.0]
+
+
+MANY = 'bodies:\n' + ''.join(
+    f'  - {{name: s{i}, shape: {{type: sphere, radius: 0.1}}, mass: 1.0, '
+    f'pose: {{position: [{i}.0, 0.0, 0.0]}}}}\n' for i in range(1000))
+
+
+def test_answers_in_the_making_are_bounded_and_one_more_is_refused(rigid_sim, monkeypatch):
+    """Each answer built in slices holds a snapshot of every body: past the bound, refused.
+
+    Every answer goes to slices here (a slice of 1 us: eight rounds for 1000 bodies), with a
+    bound of 2 (64 in the node): of four calls sent at once, the first two are answered in
+    full and the last two refused at once, saying why.
+    """
+    from rigid_sim.deferred import SERVICE_QOS
+    from simulation_interfaces.msg import Result
+    from simulation_interfaces.srv import GetEntitiesStates
+    monkeypatch.setattr('rigid_sim.entity_services.SLICE', 1e-6)
+    monkeypatch.setattr('rigid_sim.entity_services.MAX_BUILDING', 2)
+    sim = rigid_sim(yaml=MANY, rate=0.0, start_paused=True)
+    client = sim.create_node('client').create_client(
+        GetEntitiesStates, sim.topic('get_entities_states'), qos_profile=SERVICE_QOS)
+    spin_until(sim.executor, client.service_is_ready, what='service get_entities_states')
+    calls = [client.call_async(GetEntitiesStates.Request()) for _ in range(4)]
+    spin_until(sim.executor, lambda: all(call.done() for call in calls),
+               what='every call answered', timeout=TIMEOUT)
+    answers = [call.result() for call in calls]
+    assert [len(a.states) for a in answers[:2]] == [1000, 1000]
+    assert all(a.result.result == Result.RESULT_OK for a in answers[:2])
+    for refused in answers[2:]:
+        assert refused.result.result == Result.RESULT_OPERATION_FAILED
+        assert 'answers are being built, at most 2 at once' in refused.result.error_message
+        assert list(refused.states) == [] and list(refused.entities) == []
