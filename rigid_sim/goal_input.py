@@ -41,7 +41,7 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
 
-from rigid_sim import conversions
+from rigid_sim import conversions, on_demand
 from rigid_sim.core.goal_flight import snapshot
 from rigid_sim.core.goals import Goal, GoalSolver, WORST_FLIGHTS
 from rigid_sim.core.text import shown
@@ -105,12 +105,14 @@ class GoalInput:
         """Subscribe to every goal topic that has a publisher in the graph now."""
         if not self._awaited:
             return
-        present = {name for name, _ in self._node.get_topic_names_and_types()}
-        for name in present & self._awaited.keys():
-            index = self._awaited.pop(name)
-            self._subscriptions.append(self._node.create_subscription(
-                PoseStamped, name, lambda message, index=index: self._store(index, message),
-                QUEUE_DEPTH))
+        on_demand.make_for_a_slice(on_demand.appeared(self._node, self._awaited),
+                                   self._subscribe)
+
+    def _subscribe(self, name):
+        index = self._awaited.pop(name)
+        self._subscriptions.append(self._node.create_subscription(
+            PoseStamped, name, lambda message, index=index: self._store(index, message),
+            QUEUE_DEPTH))
 
     def topics(self):
         """Fully qualified goal topics, subscribed to or awaited."""

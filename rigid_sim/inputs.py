@@ -23,7 +23,7 @@ import math
 from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 
-from rigid_sim import conversions
+from rigid_sim import conversions, on_demand
 from rigid_sim.core.body_state import with_pose, with_twist
 from rigid_sim.core.scene import wrench_target
 from rigid_sim.core.text import shown
@@ -185,11 +185,13 @@ class BodyInputs:
         """Subscribe to every awaited input topic that has appeared in the graph."""
         if not self._awaited:
             return
-        present = {name for name, _ in self._node.get_topic_names_and_types()}
-        kinds = dict(STATE_TOPICS, wrench=WrenchStamped)
-        for name in present & self._awaited.keys():
-            topic, index = self._awaited.pop(name)
-            self._subscribe(kinds[topic], topic, index, self._names[index])
+        on_demand.make_for_a_slice(on_demand.appeared(self._node, self._awaited),
+                                   self._subscribe_awaited)
+
+    def _subscribe_awaited(self, name):
+        topic, index = self._awaited.pop(name)
+        kind = dict(STATE_TOPICS, wrench=WrenchStamped)[topic]
+        self._subscribe(kind, topic, index, self._names[index])
 
     def topics(self):
         """Fully qualified names of every input topic, subscribed to or awaited."""

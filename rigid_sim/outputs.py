@@ -18,13 +18,15 @@ from nav_msgs.msg import Odometry
 from rclpy.event_handler import PublisherEventCallbacks
 from visualization_msgs.msg import MarkerArray
 
-from rigid_sim import conversions
+from rigid_sim import conversions, on_demand
 from rigid_sim.qos_overrides import QUEUE_DEPTH
 from rigid_sim.tf_output import TfOutput
 
 # A new subscriber waits at most this long (s of wall time) on top of discovery, which
 # takes longer than this between processes anyway.
 LISTENER_REFRESH = 0.5
+# s of wall time to the next look while on-demand topics wait to be made (a slice each)
+BACKLOG_LOOK = 0.05
 # Per-body publishers go without rclpy's default QoS event handlers (which only log an
 # incompatible-QoS warning): each is a waitable that the executor collects again on every
 # spin, which with thousands of bodies costs more than the physics (docs/performance.md).
@@ -129,11 +131,17 @@ class StateOutputs:
                                                          QUEUE_DEPTH, event_callbacks=NO_EVENTS)
 
     def _make_on_demand(self):
-        """Make the awaited per-body publishers whose topic has appeared in the graph."""
-        present = {name for name, _ in self._node.get_topic_names_and_types()}
-        for name in present & self._awaited.keys():
-            index, slot = self._awaited.pop(name)
-            self._bodies[index][slot] = self._made(slot, name)
+        """Make the awaited per-body publishers whose topic has appeared, a slice's worth.
+
+        With more left, the next look is a BACKLOG_LOOK away, not a LISTENER_REFRESH.
+        """
+        if not on_demand.make_for_a_slice(on_demand.appeared(self._node, self._awaited),
+                                          self._make_awaited):
+            self._listeners_due = time.monotonic() + BACKLOG_LOOK
+
+    def _make_awaited(self, name):
+        index, slot = self._awaited.pop(name)
+        self._bodies[index][slot] = self._made(slot, name)
 
     def frame_messages(self, scene, world_frame, frame_prefix):
         """Make the reused messages of ``scene`` with these frame names (:meth:`set_frame`)."""
