@@ -314,15 +314,20 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
             _first_stage_lanes(s, h * b[0], h * e[0] if estimated else 0.0)
             for stage in range(1, b.size + 1):
                 if stage < b.size:
-                    _stage_lanes(s, a[stage] * h, body_axes)
+                    _stage_lanes(s, a[stage] * h)
                     at = time + k * h + c[stage] * h
                 else:   # the end, as the next substep starts from it
                     _end_lanes(s, body_axes)
                     at = time + (k + 1) * h
                 for j in range(LANES):   # a body at a time: the effects' code is any
-                    x, q, p, _ = lanes.state(s, _STAGE, j)
+                    x, q, p, angular = lanes.state(s, _STAGE, j)
+                    # Turned here, the world L costs nothing where no effect reads it.
+                    if stage == b.size:
+                        big_l = lanes.lane3(s, _WORLD_L, j)
+                    else:
+                        big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
                     force, torque = body_wrench(effects, base + min(j, count - 1), x, q, p,
-                                                lanes.lane3(s, _WORLD_L, j), at, model)
+                                                big_l, at, model)
                     lanes.put(s, _WRENCH, j, force)
                     lanes.put(s, _WRENCH + 3, j, torque)
                 _slope_lanes(s, model, base, count, h, body_axes,
@@ -375,13 +380,11 @@ def _first_stage_lanes(s, weight, estimate_weight):
 
 
 @helper(inline='always')
-def _stage_lanes(s, step, body_axes):
-    """The stage ``start + step slope`` into the stage's rows, its world ``L`` beside it."""
+def _stage_lanes(s, step):
+    """The stage ``start + step slope`` into the stage's rows."""
     for j in range(LANES):
-        stage = _plus_slope(lanes.state(s, _START, j), step, lanes.state(s, _SLOPE, j))
-        lanes.put_state(s, _STAGE, j, stage)
-        lanes.put(s, _WORLD_L, j, (kin.rotate(kin.matrix(stage[1]), stage[3]) if body_axes
-                                   else stage[3]))
+        lanes.put_state(s, _STAGE, j, _plus_slope(lanes.state(s, _START, j), step,
+                                                  lanes.state(s, _SLOPE, j)))
 
 
 @helper(inline='always')
