@@ -158,6 +158,7 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
                                            kin.vector(scales, i, 0)), rate_weight, rates[i])
 
 
+# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
 @helper(inline='always')
 def _squares(v):
     """Sum of the squares of a tuple's components."""
@@ -167,6 +168,7 @@ def _squares(v):
     return total
 
 
+# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
 @helper(inline='always')
 def _squared_ratio(change, slope):
     """``|change|^2 / |slope|^2`` of two tuples (0 when both are 0, inf when only the slope is)."""
@@ -216,6 +218,7 @@ def squared_part_rates(first, second):
             _squared_ratio(change[3], first[3]))
 
 
+# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
 @helper(inline='always')
 def feedback_rate(model, i, big_l, h):
     """``h |L| / I_min`` of body ``i``: the rate at which world-axes ``L`` feeds back.
@@ -229,6 +232,7 @@ def feedback_rate(model, i, big_l, h):
     return h * math.sqrt(kin.dot(big_l, big_l)) / model.moments[i, 0]
 
 
+# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
 @helper(inline='always')
 def _own_error(difference, rate_weight, rate):
     """Return the method's own error from the embedded difference (:class:`Tableau`).
@@ -504,6 +508,7 @@ def _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, 
 _NO_SLOPE = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
 
+# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
 @helper(inline='always')
 def _plus_slope(u, weight, v):
     """Slope tuples ``u + weight v``."""
@@ -514,7 +519,10 @@ def _plus_slope(u, weight, v):
 # One kernel per formulation and per estimate, the flags constants inside: compiled in, the
 # per-body branches on them disappear, which runtime flags keep in every body's loop. The
 # kernels without an estimate serve worlds that neither control the error nor read it
-# (``World(estimates=False)``).
+# (``World(estimates=False)``). The kernels in lanes are compiled with numba's 'numpy' error
+# model: a division by zero gives an infinity or NaN, which the substep's check reports as a
+# non-finite state, instead of a branch to raise ZeroDivisionError in every lane's loop,
+# which LLVM cannot vectorise (rigid_sim.core.lanes).
 
 
 @kernel
@@ -646,9 +654,10 @@ class ExplicitRungeKutta(Integrator):
         self._method = self.tableau.method()
         self.evaluations_per_step = len(self.tableau.b)
         count = self.bodies.count
-        # Effects that each act on one body let a body go through all stages in registers:
-        # one pass over the state instead of several per stage (all of it, at large N), and
-        # no scratch arrays to pass. ``per_body`` False forces the other order (tests).
+        # Effects that each act on one body let a block of bodies go through all stages in
+        # lanes (:func:`_runge_kutta_per_body`): one pass over the state instead of several
+        # per stage (all of it, at large N), in vector instructions. ``per_body`` False
+        # forces the other order (tests).
         if per_body is None:
             per_body = acts_per_body(system.effect_parameters())
         self._work = () if per_body else (
