@@ -13,53 +13,61 @@ default error model does): what they call is compiled ``inline='always'`` and th
 with ``error_model='numpy'``.
 
 A body's quantities are read and written as the tuples :mod:`~rigid_sim.core.kinematics`
-uses; a state or slope (x, q, P, L) takes 13 rows.
+uses; a state or slope (x, q, P, L) takes 13 rows. Each accessor is written out, element by
+element: numba types every inlined call again, and a loop over a tuple's items compiles to
+a switch on the index.
 """
 from rigid_sim.core.compiled import helper
 
 # Bodies side by side: 8 doubles fill an AVX-512 register; 16 measured the same, 4 slower.
 LANES = 8
-STATE_ROWS = 13
 
 
 @helper(inline='always')
 def lane3(s, row, j):
     """Lane ``j`` of rows ``row`` to ``row + 2``: a 3-tuple."""
-    return (s[row * LANES + j], s[(row + 1) * LANES + j], s[(row + 2) * LANES + j])
+    at = row * LANES + j
+    return (s[at], s[at + LANES], s[at + 2 * LANES])
 
 
 @helper(inline='always')
-def lane4(s, row, j):
-    """Lane ``j`` of rows ``row`` to ``row + 3``: a 4-tuple."""
-    return (s[row * LANES + j], s[(row + 1) * LANES + j], s[(row + 2) * LANES + j],
-            s[(row + 3) * LANES + j])
-
-
-@helper(inline='always')
-def lane9(s, row, j):
-    """Lane ``j`` of rows ``row`` to ``row + 8``: a 9-tuple (a matrix, as kinematics has it)."""
-    return (s[row * LANES + j], s[(row + 1) * LANES + j], s[(row + 2) * LANES + j],
-            s[(row + 3) * LANES + j], s[(row + 4) * LANES + j], s[(row + 5) * LANES + j],
-            s[(row + 6) * LANES + j], s[(row + 7) * LANES + j], s[(row + 8) * LANES + j])
-
-
-@helper(inline='always')
-def put(s, row, j, v):
-    """Lane ``j`` of rows ``row`` to ``row + len(v) - 1`` = the tuple ``v``."""
-    for k in range(len(v)):
-        s[(row + k) * LANES + j] = v[k]
+def put3(s, row, j, v):
+    """Lane ``j`` of rows ``row`` to ``row + 2`` = the 3-tuple ``v``."""
+    at = row * LANES + j
+    s[at], s[at + LANES], s[at + 2 * LANES] = v
 
 
 @helper(inline='always')
 def state(s, row, j):
     """Lane ``j`` of the 13 rows from ``row``: a state or slope as (x, q, P, L) tuples."""
-    return lane3(s, row, j), lane4(s, row + 3, j), lane3(s, row + 7, j), lane3(s, row + 10, j)
+    at = row * LANES + j
+    return ((s[at], s[at + LANES], s[at + 2 * LANES]),
+            (s[at + 3 * LANES], s[at + 4 * LANES], s[at + 5 * LANES], s[at + 6 * LANES]),
+            (s[at + 7 * LANES], s[at + 8 * LANES], s[at + 9 * LANES]),
+            (s[at + 10 * LANES], s[at + 11 * LANES], s[at + 12 * LANES]))
 
 
 @helper(inline='always')
 def put_state(s, row, j, v):
     """Lane ``j`` of the 13 rows from ``row`` = the (x, q, P, L) tuples ``v``."""
-    put(s, row, j, v[0])
-    put(s, row + 3, j, v[1])
-    put(s, row + 7, j, v[2])
-    put(s, row + 10, j, v[3])
+    at = row * LANES + j
+    s[at], s[at + LANES], s[at + 2 * LANES] = v[0]
+    s[at + 3 * LANES], s[at + 4 * LANES], s[at + 5 * LANES], s[at + 6 * LANES] = v[1]
+    s[at + 7 * LANES], s[at + 8 * LANES], s[at + 9 * LANES] = v[2]
+    s[at + 10 * LANES], s[at + 11 * LANES], s[at + 12 * LANES] = v[3]
+
+
+@helper(inline='always')
+def matrix(s, row, j):
+    """Lane ``j`` of rows ``row`` to ``row + 8``: a 9-tuple (a matrix, as kinematics has it)."""
+    at = row * LANES + j
+    return (s[at], s[at + LANES], s[at + 2 * LANES], s[at + 3 * LANES], s[at + 4 * LANES],
+            s[at + 5 * LANES], s[at + 6 * LANES], s[at + 7 * LANES], s[at + 8 * LANES])
+
+
+@helper(inline='always')
+def put_matrix(s, row, j, m):
+    """Lane ``j`` of rows ``row`` to ``row + 8`` = the 9-tuple ``m``."""
+    at = row * LANES + j
+    (s[at], s[at + LANES], s[at + 2 * LANES], s[at + 3 * LANES], s[at + 4 * LANES],
+     s[at + 5 * LANES], s[at + 6 * LANES], s[at + 7 * LANES], s[at + 8 * LANES]) = m

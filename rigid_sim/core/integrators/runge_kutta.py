@@ -158,8 +158,7 @@ def _end_slopes(y, work, model, effects, time, weight, rate_weight, body_axes, f
                                            kin.vector(scales, i, 0)), rate_weight, rates[i])
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def _squares(v):
     """Sum of the squares of a tuple's components."""
     total = 0.0
@@ -232,8 +231,7 @@ def feedback_rate(model, i, big_l, h):
     return h * math.sqrt(kin.dot(big_l, big_l)) / model.moments[i, 0]
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def _own_error(difference, rate_weight, rate):
     """Return the method's own error from the embedded difference (:class:`Tableau`).
 
@@ -332,8 +330,8 @@ def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps,
                         big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
                     force, torque = body_wrench(effects, base + min(j, count - 1), x, q, p,
                                                 big_l, at, model)
-                    lanes.put(s, _WRENCH, j, force)
-                    lanes.put(s, _WRENCH + 3, j, torque)
+                    lanes.put3(s, _WRENCH, j, force)
+                    lanes.put3(s, _WRENCH + 3, j, torque)
                 _slope_lanes(s, model, base, count, h, body_axes,
                              over_a21 if estimated and stage == 1 and stage < b.size else 0.0)
                 if stage < b.size:
@@ -358,12 +356,12 @@ def _gather_lanes(s, y, fsal, model, base, count, dt, body_axes, estimated):
         x, q, p, big_l = kin.body_state(y, i)
         angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
         lanes.put_state(s, _SUM, j, (x, q, p, angular))
-        lanes.put(s, _WORLD_L, j, big_l)
+        lanes.put3(s, _WORLD_L, j, big_l)
         lanes.put_state(s, _SLOPE, j, kin.body_state(fsal, i))
-        lanes.put(s, _INERTIA, j, kin.entries(model.inertia_inv, i))
+        lanes.put_matrix(s, _INERTIA, j, kin.entries(model.inertia_inv, i))
         s[_INVERSE_MASS * LANES + j] = model.inverse_mass[i]
         if estimated:
-            lanes.put(s, _SCALES, j, body_scales(model, i, p, big_l, dt))
+            lanes.put3(s, _SCALES, j, body_scales(model, i, p, big_l, dt))
             s[_TOTAL * LANES + j] = 0.0
 
 
@@ -405,7 +403,7 @@ def _end_lanes(s, body_axes):
         angular = kin.rotate_inverse(r, big_l) if body_axes else big_l
         lanes.put_state(s, _SUM, j, (x, q, p, angular))
         lanes.put_state(s, _STAGE, j, (x, q, p, angular))
-        lanes.put(s, _WORLD_L, j, big_l)
+        lanes.put3(s, _WORLD_L, j, big_l)
 
 
 @helper(inline='always')
@@ -432,10 +430,9 @@ def _slope_lanes(s, model, base, count, h, body_axes, over_a21):
 @helper(inline='always')
 def _lane_slope(s, j, body_axes):
     """:func:`derivative` of lane ``j`` at its stage and wrench."""
-    return derivative(lanes.lane4(s, _STAGE + 3, j), lanes.lane3(s, _STAGE + 7, j),
-                      lanes.lane3(s, _STAGE + 10, j), lanes.lane3(s, _WRENCH, j),
-                      lanes.lane3(s, _WRENCH + 3, j), lanes.lane9(s, _INERTIA, j),
-                      s[_INVERSE_MASS * LANES + j], body_axes)
+    _, q, p, angular = lanes.state(s, _STAGE, j)
+    return derivative(q, p, angular, lanes.lane3(s, _WRENCH, j), lanes.lane3(s, _WRENCH + 3, j),
+                      lanes.matrix(s, _INERTIA, j), s[_INVERSE_MASS * LANES + j], body_axes)
 
 
 @helper(inline='always')
@@ -453,7 +450,7 @@ def _close_estimate_lanes(s, weight, rate_weight):
         dx, dq, dp, dl = _plus_slope(lanes.state(s, _ESTIMATE, j), weight,
                                      lanes.state(s, _SLOPE, j))
         s[_TOTAL * LANES + j] += _own_error(
-            scaled_size(dx, turning_part(dq, lanes.lane4(s, _SUM + 3, j)), dp, dl,
+            scaled_size(dx, turning_part(dq, lanes.state(s, _SUM, j)[1]), dp, dl,
                         lanes.lane3(s, _SCALES, j)), rate_weight, s[_RATE * LANES + j])
 
 
@@ -508,8 +505,7 @@ def _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, 
 _NO_SLOPE = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def _plus_slope(u, weight, v):
     """Slope tuples ``u + weight v``."""
     return (kin.plus_scaled(u[0], weight, v[0]), kin.plus_scaled4(u[1], weight, v[1]),
