@@ -367,7 +367,7 @@ def _gather_lanes(s, y, fsal, model, base, count, dt, body_axes, estimated):
 
 @helper(inline='always')
 def _first_stage_lanes(s, weight, estimate_weight):
-    """A substep's start: the sums start at the state plus ``weight`` times the first slope.
+    """Start a substep: the sums at the state plus ``weight`` times the first slope.
 
     The estimate's terms start at ``estimate_weight`` times it (none when 0), the rate at 0.
     """
@@ -383,7 +383,7 @@ def _first_stage_lanes(s, weight, estimate_weight):
 
 @helper(inline='always')
 def _stage_lanes(s, step):
-    """The stage ``start + step slope`` into the stage's rows."""
+    """Put the stage ``start + step slope`` into the stage's rows."""
     for j in range(LANES):
         lanes.put_state(s, _STAGE, j, _plus_slope(lanes.state(s, _START, j), step,
                                                   lanes.state(s, _SLOPE, j)))
@@ -391,7 +391,7 @@ def _stage_lanes(s, step):
 
 @helper(inline='always')
 def _end_lanes(s, body_axes):
-    """The step's end as its last evaluation sees it: ``q`` normalised, ``L`` turned back.
+    """Make the step's end as its last evaluation sees it: ``q`` normalised, ``L`` turned.
 
     The internal momentum the next substep starts from is the one turned there and back.
     """
@@ -437,7 +437,7 @@ def _lane_slope(s, j, body_axes):
 
 @helper(inline='always')
 def _add_slope_lanes(s, row, weight):
-    """The 13 rows from ``row`` += ``weight`` times the slope at hand."""
+    """Add ``weight`` times the slope at hand to the 13 rows from ``row``."""
     for j in range(LANES):
         lanes.put_state(s, row, j, _plus_slope(lanes.state(s, row, j), weight,
                                                lanes.state(s, _SLOPE, j)))
@@ -476,7 +476,7 @@ def _check_lanes(s, y, fsal, base, count, k, first, alive):
 
 @helper(inline='always')
 def _store_lanes(s, y, fsal, error, base, count, alive, estimated, largest):
-    """The living lanes' states and end slopes back; every lane's estimate; return the largest."""
+    """Store the living lanes' states and end slopes, every lane's estimate; the largest."""
     for j in range(count):
         living = alive & (1 << j)
         if living:
