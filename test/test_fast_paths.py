@@ -297,7 +297,7 @@ def _lanes_scene():
     generator = np.random.default_rng(7)
     bodies = RigidBodies(tuple(f'b{i}' for i in range(count)),
                          generator.uniform(0.5, 3.0, count),
-                         np.array([np.diag(generator.uniform(0.5, 2.0, 3)) for _ in range(count)]),
+                         np.array([np.diag(generator.uniform(1.0, 1.8, 3)) for _ in range(count)]),
                          np.zeros((count, 3)))
     y = initial_state(bodies, generator.normal(size=(count, 3)),
                       Rotation.random(count, random_state=7).as_quat(),
