@@ -332,7 +332,7 @@ def _strang_substep(y, k, work, model, effects, time, h, weights, velocity_depen
     estimates, scales, origin, halves = work[5], work[6], work[7], work[8]
     t = time + k * h
     if estimate == RICHARDSON:
-        origin[:, :] = y
+        kin.copy_columns(origin, 0, y, 0, y.shape[1])
     _strang_step(y, work, model, effects, t, h, weights, velocity_dependent, a, b, drift,
                  estimate == STRANG_TERMS)
     if estimate == STRANG_TERMS:
@@ -343,7 +343,7 @@ def _strang_substep(y, k, work, model, effects, time, h, weights, velocity_depen
                  (estimates[i, 6], estimates[i, 7], estimates[i, 8], estimates[i, 9])),
                 kin.vector(scales, i, 0))
     elif estimate == RICHARDSON:
-        halves[:, :] = origin
+        kin.copy_columns(halves, 0, origin, 0, origin.shape[1])
         for half in range(2):
             _strang_step(halves, work, model, effects, t + half * (0.5 * h), 0.5 * h, weights,
                          velocity_dependent, a, b, drift, False)
