@@ -38,11 +38,16 @@ class _RecordingExecutor:
 
 
 class _StandInNode:
-    def __init__(self):
+    def __init__(self, start):
         self.owner = SimpleNamespace(keeps_heap_frozen=False)
+        start.exists(self)
+        start.compiled()
 
     def destroy_node(self):
         pass
+
+    def get_logger(self):
+        return SimpleNamespace(info=lambda message: None)
 
 
 def test_objects_alive_before_the_first_spin_are_frozen(monkeypatch):
