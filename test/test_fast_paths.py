@@ -6,8 +6,8 @@ Bodies that share no effect are independent, so the exact free flow of a body mu
 on which other bodies share its call (all elliptic: the unmasked path; mixed with a still and a
 spherical body: the masked path). The step guard reuses the spin bound of the state it checked
 at the end of the last step; a wrench held since then must still be seen. When no effect
-couples bodies, the Runge-Kutta methods take blocks of bodies side by side (lanes) through
-all stages; that changes the order of the loops, not one operation on a body.
+couples bodies, the Runge-Kutta methods take one body at a time through all stages; that
+changes the order of the loops, not one operation on a body.
 """
 import math
 
@@ -23,7 +23,6 @@ from rigid_sim.core.inputs import AppliedWrenches
 from rigid_sim.core.integrators import REGISTRY, make_integrator, runge_kutta, splitting
 from rigid_sim.core.integrators.free_rotation import torque_free_flow
 from rigid_sim.core.kinematics import largest_spin
-from rigid_sim.core.lanes import LANES
 from rigid_sim.core.state import (ANGULAR_MOMENTUM as L_COLUMNS, initial_state,
                                   LINEAR_MOMENTUM, RigidBodies)
 from rigid_sim.core.world import World
@@ -286,63 +285,6 @@ def test_runge_kutta_a_body_at_a_time_reports_the_first_bad_substep():
     state[3, 10:13] = 1e154
     (code, *_), (staged_code, *_) = _advance_both('rk4', world, state, 0.1, 4)
     assert code == staged_code == 1
-
-
-def _lanes_scene():
-    """More bodies than two blocks of lanes and part of a third, under gravity and damping.
-
-    Every third body holds a body-axes wrench, so neighbouring lanes see different effects.
-    """
-    count = 2 * LANES + 3
-    generator = np.random.default_rng(7)
-    bodies = RigidBodies(tuple(f'b{i}' for i in range(count)),
-                         generator.uniform(0.5, 3.0, count),
-                         np.array([np.diag(generator.uniform(1.0, 1.8, 3)) for _ in range(count)]),
-                         np.zeros((count, 3)))
-    y = initial_state(bodies, generator.normal(size=(count, 3)),
-                      Rotation.random(count, random_state=7).as_quat(),
-                      generator.normal(size=(count, 3)),
-                      generator.normal(scale=2.0, size=(count, 3)))
-    wrenches = AppliedWrenches(bodies)
-    for body in range(0, count, 3):
-        wrenches.hold(body, 'push', 'body', (1.0, -2.0, 0.5), (0.3, 0.1, -0.2))
-    effects = [Gravity(bodies, (0.1, -0.2, -9.81)), Damping(bodies, 0.3, 0.2)]
-    return World(bodies, y, effects, 'rk4', auto_substep=False, inputs=wrenches), y
-
-
-@pytest.mark.parametrize('name', ['rk4', 'rk4_world', 'euler'])
-def test_runge_kutta_in_lanes_equals_stage_by_stage_in_every_block(name):
-    """Bodies go through a step in blocks side by side; the last block is only part full.
-
-    Each body's bits and estimate are those of the stage-by-stage kernel, in the full blocks
-    and in the part-full one, whose spare lanes are never stored.
-    """
-    world, y = _lanes_scene()
-    world.integrator = REGISTRY[name](world, 1e-6)
-    _assert_both_orders_agree(name, world, y)
-
-
-def test_runge_kutta_in_lanes_reports_the_earliest_bad_substep_over_the_blocks():
-    """A body that goes bad stops there; the earliest substep over all blocks is reported.
-
-    Body 3 (first block) at x = 1.78e308 m moving at 4e307 m/s gains 1e306 m per substep of
-    0.025 s: finite after the first, beyond the largest double after the second (code 2).
-    Body 12 (second block) with an angular momentum of 1e154 kg m^2/s overflows in the first
-    (code 1), which wins though its body comes later, as stage by stage. The bodies that did
-    not go bad, in both blocks and the part-full third, end where they do in a step without
-    the bad ones, and report their estimates; the bad ones report an infinite one.
-    """
-    world, y = _lanes_scene()
-    state = world.y.copy()
-    state[3, 0], state[3, 7] = 1.78e308, 4e307 * world.bodies.mass[3]
-    state[12, 10:13] = 1e154
-    (code, got, error, largest), (staged_code, *_) = _advance_both('rk4', world, state, 0.1, 4)
-    assert code == staged_code == 1
-    assert np.isinf(error[[3, 12]]).all() and largest == math.inf
-    (_, clean, clean_error, _), _ = _advance_both('rk4', world, world.y.copy(), 0.1, 4)
-    good = np.setdiff1d(np.arange(len(state)), [3, 12])
-    np.testing.assert_array_equal(got[good], clean[good])
-    np.testing.assert_array_equal(error[good], clean_error[good])
 
 
 @pytest.mark.parametrize('damped', [False, True])

@@ -60,8 +60,7 @@ def store_scales(y, model, dt, scales):
                                             kin.vector(y, i, 10), dt))
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def turning_part(dq, q):
     """Return the part of a quaternion error ``dq`` that turns the unit ``q``: dq - (dq.q) q.
 
@@ -81,8 +80,7 @@ def quaternion_error(angle, q):
     return kin.multiply((0.5 * angle[0], 0.5 * angle[1], 0.5 * angle[2], 0.0), q)
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def scaled_size(dx, dq, dp, dl, scales):
     """Largest component of the error (``dx``, ``dq``, ``dp``, ``dl`` tuples) over its scale."""
     length, momentum, angular = scales

@@ -16,8 +16,7 @@ from rigid_sim.core.compiled import helper, kernel
 UNIT_QUATERNION_SLACK = 1e-6
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def matrix(q):
     """``R`` (9-tuple, row-major) of the quaternion ``q`` (x, y, z, w), Shoemake's formula.
 
@@ -93,8 +92,7 @@ def dot(u, v):
     return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def multiply(p, q):
     """Hamilton product ``p q`` of 4-tuples (x, y, z, w)."""
     return (p[3] * q[0] + q[3] * p[0] + p[1] * q[2] - p[2] * q[1],
@@ -109,8 +107,7 @@ def conjugate(q):
     return (-q[0], -q[1], -q[2], q[3])
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def normalize(q):
     """``q / |q|`` of a 4-tuple."""
     scale = 1.0 / math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])

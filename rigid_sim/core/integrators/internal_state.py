@@ -24,8 +24,7 @@ def to_internal(y, start, body_axes):
             kin.store(start, i, 10, kin.rotate_inverse(r, kin.vector(y, i, 10)))
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def derivative(q, momentum, angular, force, torque, inertia_inv, inverse_mass, body_axes):
     """``d/dt`` of a body's internal state: (dx, dq, dP, dL) tuples.
 

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core import kinematics as kin
-from rigid_sim.core import lanes
 from rigid_sim.core import safeguards
 from rigid_sim.core.compiled import helper, kernel
 from rigid_sim.core.dispatch import across_threads, CompiledCall
@@ -23,7 +22,6 @@ from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, derivative, set_stage,
                                                        slope_of, to_internal, to_public)
 from rigid_sim.core.integrators.substeps import substeps_checked
-from rigid_sim.core.lanes import LANES
 
 
 @dataclass(frozen=True)
@@ -167,8 +165,7 @@ def _squares(v):
     return total
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def _squared_ratio(change, slope):
     """``|change|^2 / |slope|^2`` of two tuples (0 when both are 0, inf when only the slope is)."""
     moved = _squares(change)
@@ -217,8 +214,7 @@ def squared_part_rates(first, second):
             _squared_ratio(change[3], first[3]))
 
 
-# Inlined by numba, as everything the lanes' loops call must be (rigid_sim.core.lanes).
-@helper(inline='always')
+@helper
 def feedback_rate(model, i, big_l, h):
     """``h |L| / I_min`` of body ``i``: the rate at which world-axes ``L`` feeds back.
 
@@ -275,219 +271,87 @@ def _runge_kutta_substep(y, k, work, model, effects, time, h, method, body_axes,
         _start_slopes(y, work, model, effects, time + (k + 1) * h, body_axes, fsal)
 
 
-# Rows of the lanes' scratch (:mod:`~rigid_sim.core.lanes`): states and slopes 13 rows each.
-_SUM, _START, _SLOPE, _STAGE, _ESTIMATE = 0, 13, 26, 39, 52   # the step's sum, its start,
-_WRENCH, _WORLD_L, _SCALES, _RATE, _TOTAL = 65, 71, 74, 77, 78   # the slope at hand, the
-_INERTIA, _INVERSE_MASS, _ROWS = 79, 88, 89   # stage, the estimate's terms; force, torque
-
-
 @helper(inline='always')
 def _runge_kutta_per_body(y, first_body, end, model, effects, time, h, substeps, method,
                           body_axes, estimated, error, fsal, continuing):
-    """:func:`_runge_kutta` for effects that each act on one body: blocks of bodies in lanes.
+    """:func:`_runge_kutta` for effects that each act on one body: a body at a time.
 
     Steps the bodies ``first_body`` to ``end - 1``: calls on disjoint ranges may run at once
     on several threads (:class:`~rigid_sim.core.dispatch.BodyThreads`).
 
-    :data:`~rigid_sim.core.lanes.LANES` bodies at a time go through all their substeps and
-    stages side by side in a scratch of rows, so LLVM vectorises the stages' arithmetic
-    across them; only the wrench (any effect's code) and the checks go a body at a time.
-    Each lane does the arithmetic :func:`_runge_kutta` does for its body, in the same order,
-    so the two agree to the last bit, whatever the block a body falls in (test_fast_paths,
-    test_body_threads). A block at the end with fewer bodies fills its other lanes with its
-    last body, never stored. A body that fails a substep stops there, as in
-    :func:`_runge_kutta`: the failure code of the earliest bad substep over the bodies (the
-    first such body's sign) is returned. ``estimated`` False, as in :func:`_runge_kutta`.
-    One function with inlined parts on purpose: a call, even inlined by LLVM, took and
-    dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
-    "A body at a time").
+    Each body goes through all its substeps and stages in registers, with the arithmetic
+    :func:`_runge_kutta` does for it, so the two agree to the last bit. Returns the failure
+    code of the earliest bad substep over the bodies (the first such body's sign), as
+    :func:`_runge_kutta` does. One function on purpose: a call per body, even inlined, took
+    and dropped references to every array of ``model`` and ``effects`` (docs/performance.md,
+    "A body at a time"). ``estimated`` False, as in :func:`_runge_kutta`.
     """
     a, b, c, e, e_end, rate_weight = method
     over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
     if not continuing:
         _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, fsal)
     first, largest = 0, (0.0 if estimated else math.nan)
-    s = np.empty(_ROWS * LANES)
-    for base in range(first_body, end, LANES):
-        count = min(LANES, end - base)
-        _gather_lanes(s, y, fsal, model, base, count, h * substeps, body_axes, estimated)
-        alive = (1 << count) - 1   # a bit for each lane whose body has not failed
+    for i in range(first_body, end):
+        x, q, p, big_l = kin.body_state(y, i)
+        inertia_inv, inverse_mass = kin.entries(model.inertia_inv, i), model.inverse_mass[i]
+        scales = (body_scales(model, i, p, big_l, h * substeps) if estimated
+                  else (1.0, 1.0, 1.0))
+        slope = kin.body_state(fsal, i)   # the first slope: the last step's end
+        angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
+        total = 0.0
         for k in range(substeps):
-            _first_stage_lanes(s, h * b[0], h * e[0] if estimated else 0.0)
+            start, rate = (x, q, p, angular), 0.0
+            (x, q, p, angular), estimate = _take_slope(start, _NO_SLOPE, slope, h * b[0],
+                                                       h * e[0] if estimated else 0.0)
+            # Stages 1 .. S-1, then the end: one place evaluates the wrench, which numba
+            # inlines (two inlined copies in one function confuse its variable scopes).
             for stage in range(1, b.size + 1):
                 if stage < b.size:
-                    _stage_lanes(s, a[stage] * h)
+                    step = a[stage] * h
+                    stage_x = kin.plus_scaled(start[0], step, slope[0])
+                    stage_q = kin.plus_scaled4(start[1], step, slope[1])
+                    stage_p = kin.plus_scaled(start[2], step, slope[2])
+                    stage_angular = kin.plus_scaled(start[3], step, slope[3])
+                    stage_l = (kin.rotate(kin.matrix(stage_q), stage_angular) if body_axes
+                               else stage_angular)
                     at = time + k * h + c[stage] * h
                 else:   # the end, as the next substep starts from it
-                    _end_lanes(s, body_axes)
+                    q = kin.normalize(q)
+                    r = kin.matrix(q)
+                    big_l = kin.rotate(r, angular) if body_axes else angular
+                    stage_x, stage_q, stage_p, stage_l = x, q, p, big_l
+                    stage_angular = kin.rotate_inverse(r, big_l) if body_axes else big_l
                     at = time + (k + 1) * h
-                for j in range(LANES):   # a body at a time: the effects' code is any
-                    x, q, p, angular = lanes.state(s, _STAGE, j)
-                    # Turned here, the world L costs nothing where no effect reads it.
-                    if stage == b.size:
-                        big_l = lanes.lane3(s, _WORLD_L, j)
-                    else:
-                        big_l = kin.rotate(kin.matrix(q), angular) if body_axes else angular
-                    force, torque = body_wrench(effects, base + min(j, count - 1), x, q, p,
-                                                big_l, at, model)
-                    lanes.put3(s, _WRENCH, j, force)
-                    lanes.put3(s, _WRENCH + 3, j, torque)
-                _slope_lanes(s, model, base, count, h, body_axes,
-                             over_a21 if estimated and stage == 1 and stage < b.size else 0.0)
+                force, torque = body_wrench(effects, i, stage_x, stage_q, stage_p, stage_l, at,
+                                            model)
+                # The first slope, for the rate, kept only until the second is made: it takes
+                # no registers through the other stages.
+                previous = slope
+                slope = derivative(stage_q, stage_p, stage_angular, force, torque,
+                                   inertia_inv, inverse_mass, body_axes)
+                if estimated and stage == 1 and stage < b.size:
+                    rate = _step_rate(previous, slope, over_a21)
+                    if not body_axes:
+                        rate = max(rate, feedback_rate(model, i, start[3], h))
                 if stage < b.size:
-                    _add_slope_lanes(s, _SUM, h * b[stage])
-                    if estimated and e[stage] != 0.0:
-                        _add_slope_lanes(s, _ESTIMATE, h * e[stage])
+                    (x, q, p, angular), estimate = _take_slope(
+                        (x, q, p, angular), estimate, slope, h * b[stage],
+                        h * e[stage] if estimated else 0.0)
+            angular = stage_angular   # the end's internal momentum, where the next starts
             if estimated:
-                _close_estimate_lanes(s, h * e_end, rate_weight)
-            first, alive = _check_lanes(s, y, fsal, base, count, k, first, alive)
-        largest = _store_lanes(s, y, fsal, error, base, count, alive, estimated, largest)
-    return first, largest
-
-
-@helper(inline='always')
-def _gather_lanes(s, y, fsal, model, base, count, dt, body_axes, estimated):
-    """Bodies ``base`` on into the lanes: state (internal layout), first slope, scales, inertia.
-
-    Lanes past ``count`` take the last body's. ``dt`` is the step the scales are for.
-    """
-    for j in range(LANES):
-        i = base + min(j, count - 1)
-        x, q, p, big_l = kin.body_state(y, i)
-        angular = kin.rotate_inverse(kin.matrix(q), big_l) if body_axes else big_l
-        lanes.put_state(s, _SUM, j, (x, q, p, angular))
-        lanes.put3(s, _WORLD_L, j, big_l)
-        lanes.put_state(s, _SLOPE, j, kin.body_state(fsal, i))
-        lanes.put_matrix(s, _INERTIA, j, kin.entries(model.inertia_inv, i))
-        s[_INVERSE_MASS * LANES + j] = model.inverse_mass[i]
+                dx, dq, dp, dl = _plus_slope(estimate, h * e_end, slope)
+                total += _own_error(scaled_size(dx, turning_part(dq, q), dp, dl, scales),
+                                    rate_weight, rate)
+            code = kin.check_body(x, q, p, big_l)
+            if code != 0:
+                first, total = kin.earlier_failure(first, code, k + 1), math.inf
+                break
+        kin.store_body(y, i, x, q, p, big_l)
+        kin.store_body(fsal, i, *slope)
         if estimated:
-            lanes.put3(s, _SCALES, j, body_scales(model, i, p, big_l, dt))
-            s[_TOTAL * LANES + j] = 0.0
-
-
-@helper(inline='always')
-def _first_stage_lanes(s, weight, estimate_weight):
-    """Start a substep: the sums at the state plus ``weight`` times the first slope.
-
-    The estimate's terms start at ``estimate_weight`` times it (none when 0), the rate at 0.
-    """
-    for j in range(LANES):
-        start = lanes.state(s, _SUM, j)
-        lanes.put_state(s, _START, j, start)
-        lanes.put_state(s, _SUM, j, _plus_slope(start, weight, lanes.state(s, _SLOPE, j)))
-        lanes.put_state(s, _ESTIMATE, j, _NO_SLOPE)
-        s[_RATE * LANES + j] = 0.0
-    if estimate_weight != 0.0:
-        _add_slope_lanes(s, _ESTIMATE, estimate_weight)
-
-
-@helper(inline='always')
-def _stage_lanes(s, step):
-    """Put the stage ``start + step slope`` into the stage's rows."""
-    for j in range(LANES):
-        lanes.put_state(s, _STAGE, j, _plus_slope(lanes.state(s, _START, j), step,
-                                                  lanes.state(s, _SLOPE, j)))
-
-
-@helper(inline='always')
-def _end_lanes(s, body_axes):
-    """Make the step's end as its last evaluation sees it: ``q`` normalised, ``L`` turned.
-
-    The internal momentum the next substep starts from is the one turned there and back.
-    """
-    for j in range(LANES):
-        x, q, p, angular = lanes.state(s, _SUM, j)
-        q = kin.normalize(q)
-        r = kin.matrix(q)
-        big_l = kin.rotate(r, angular) if body_axes else angular
-        angular = kin.rotate_inverse(r, big_l) if body_axes else big_l
-        lanes.put_state(s, _SUM, j, (x, q, p, angular))
-        lanes.put_state(s, _STAGE, j, (x, q, p, angular))
-        lanes.put3(s, _WORLD_L, j, big_l)
-
-
-@helper(inline='always')
-def _slope_lanes(s, model, base, count, h, body_axes, over_a21):
-    """Each lane's slope at its stage and wrench; ``over_a21`` not 0: the rate from them.
-
-    The rate (:func:`_step_rate`) compares the new slope with the one it replaces, the
-    first; on world-axes momenta it is at least :func:`feedback_rate`.
-    """
-    if over_a21 == 0.0:
-        for j in range(LANES):
-            lanes.put_state(s, _SLOPE, j, _lane_slope(s, j, body_axes))
-        return
-    for j in range(LANES):
-        slope = _lane_slope(s, j, body_axes)
-        rate = _step_rate(lanes.state(s, _SLOPE, j), slope, over_a21)
-        if not body_axes:
-            rate = max(rate, feedback_rate(model, base + min(j, count - 1),
-                                           lanes.lane3(s, _START + 10, j), h))
-        s[_RATE * LANES + j] = rate
-        lanes.put_state(s, _SLOPE, j, slope)
-
-
-@helper(inline='always')
-def _lane_slope(s, j, body_axes):
-    """:func:`derivative` of lane ``j`` at its stage and wrench."""
-    _, q, p, angular = lanes.state(s, _STAGE, j)
-    return derivative(q, p, angular, lanes.lane3(s, _WRENCH, j), lanes.lane3(s, _WRENCH + 3, j),
-                      lanes.matrix(s, _INERTIA, j), s[_INVERSE_MASS * LANES + j], body_axes)
-
-
-@helper(inline='always')
-def _add_slope_lanes(s, row, weight):
-    """Add ``weight`` times the slope at hand to the 13 rows from ``row``."""
-    for j in range(LANES):
-        lanes.put_state(s, row, j, _plus_slope(lanes.state(s, row, j), weight,
-                                               lanes.state(s, _SLOPE, j)))
-
-
-@helper(inline='always')
-def _close_estimate_lanes(s, weight, rate_weight):
-    """Add each lane's estimate of the substep, its terms plus ``weight`` times the end slope."""
-    for j in range(LANES):
-        dx, dq, dp, dl = _plus_slope(lanes.state(s, _ESTIMATE, j), weight,
-                                     lanes.state(s, _SLOPE, j))
-        s[_TOTAL * LANES + j] += _own_error(
-            scaled_size(dx, turning_part(dq, lanes.state(s, _SUM, j)[1]), dp, dl,
-                        lanes.lane3(s, _SCALES, j)), rate_weight, s[_RATE * LANES + j])
-
-
-@helper(inline='always')
-def _check_lanes(s, y, fsal, base, count, k, first, alive):
-    """Check each living lane after substep ``k``; return the failure code and the living.
-
-    A body that fails stops there: its state and slope are stored, its estimate is infinite.
-    """
-    for j in range(count):
-        if not alive & (1 << j):
-            continue
-        x, q, p, _ = lanes.state(s, _SUM, j)
-        big_l = lanes.lane3(s, _WORLD_L, j)
-        code = kin.check_body(x, q, p, big_l)
-        if code != 0:
-            first = kin.earlier_failure(first, code, k + 1)
-            kin.store_body(y, base + j, x, q, p, big_l)
-            kin.store_body(fsal, base + j, *lanes.state(s, _SLOPE, j))
-            alive &= ~(1 << j)
-    return first, alive
-
-
-@helper(inline='always')
-def _store_lanes(s, y, fsal, error, base, count, alive, estimated, largest):
-    """Store the living lanes' states and end slopes, every lane's estimate; the largest."""
-    for j in range(count):
-        living = alive & (1 << j)
-        if living:
-            x, q, p, _ = lanes.state(s, _SUM, j)
-            kin.store_body(y, base + j, x, q, p, lanes.lane3(s, _WORLD_L, j))
-            kin.store_body(fsal, base + j, *lanes.state(s, _SLOPE, j))
-        if estimated:
-            total = s[_TOTAL * LANES + j] if living else math.inf
-            error[base + j] = total
+            error[i] = total
             largest = max(largest, total)
-    return largest
+    return first, largest
 
 
 @helper
@@ -500,6 +364,14 @@ def _start_slopes_per_body(y, first_body, end, model, effects, time, body_axes, 
         slope = derivative(q, p, angular, force, torque, kin.entries(model.inertia_inv, i),
                            model.inverse_mass[i], body_axes)
         kin.store_body(fsal, i, *slope)
+
+
+@helper
+def _take_slope(sums, estimate, slope, weight, estimate_weight):
+    """Return the step's sums and estimate (slope tuples) with ``slope`` added, weighted."""
+    if estimate_weight != 0.0:   # most of a tableau's stages are not in its estimate
+        estimate = _plus_slope(estimate, estimate_weight, slope)
+    return _plus_slope(sums, weight, slope), estimate
 
 
 _NO_SLOPE = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
@@ -515,10 +387,7 @@ def _plus_slope(u, weight, v):
 # One kernel per formulation and per estimate, the flags constants inside: compiled in, the
 # per-body branches on them disappear, which runtime flags keep in every body's loop. The
 # kernels without an estimate serve worlds that neither control the error nor read it
-# (``World(estimates=False)``). The kernels in lanes are compiled with numba's 'numpy' error
-# model: a division by zero gives an infinity or NaN, which the substep's check reports as a
-# non-finite state, instead of a branch to raise ZeroDivisionError in every lane's loop,
-# which LLVM cannot vectorise (rigid_sim.core.lanes).
+# (``World(estimates=False)``).
 
 
 @kernel
@@ -553,7 +422,7 @@ def world_axes_runge_kutta_unestimated(y, work, model, effects, time, h, substep
                         fsal, continuing)
 
 
-@kernel(error_model='numpy')
+@kernel
 def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error, fsal,
                                    continuing):
     """:func:`_runge_kutta_per_body` on body-axes angular momentum."""
@@ -561,7 +430,7 @@ def body_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, m
                                  True, error, fsal, continuing)
 
 
-@kernel(error_model='numpy')
+@kernel
 def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, method, error,
                                     fsal, continuing):
     """:func:`_runge_kutta_per_body` on world-axes angular momentum."""
@@ -569,7 +438,7 @@ def world_axes_runge_kutta_per_body(y, work, model, effects, time, h, substeps, 
                                  False, True, error, fsal, continuing)
 
 
-@kernel(error_model='numpy')
+@kernel
 def body_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h, substeps, method,
                                                error, fsal, continuing):
     """:func:`_runge_kutta_per_body` on body-axes angular momentum, no estimate."""
@@ -577,7 +446,7 @@ def body_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h,
                                  False, error, fsal, continuing)
 
 
-@kernel(error_model='numpy')
+@kernel
 def world_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h, substeps, method,
                                                 error, fsal, continuing):
     """:func:`_runge_kutta_per_body` on world-axes angular momentum, no estimate."""
@@ -588,7 +457,7 @@ def world_axes_runge_kutta_per_body_unestimated(y, work, model, effects, time, h
 # without the interpreter lock, which costs a one-call kernel 40 ns.
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def body_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, method, error, fsal,
                                    continuing):
     """:func:`body_axes_runge_kutta_per_body` on bodies ``work[0]`` to ``work[1] - 1``."""
@@ -596,7 +465,7 @@ def body_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, m
                                  True, True, error, fsal, continuing)
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def world_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, method, error,
                                     fsal, continuing):
     """:func:`world_axes_runge_kutta_per_body` on bodies ``work[0]`` to ``work[1] - 1``."""
@@ -604,7 +473,7 @@ def world_axes_runge_kutta_threaded(y, work, model, effects, time, h, substeps, 
                                  False, True, error, fsal, continuing)
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def body_axes_runge_kutta_threaded_unestimated(y, work, model, effects, time, h, substeps, method,
                                                error, fsal, continuing):
     """:func:`body_axes_runge_kutta_per_body_unestimated` on ``work[0]`` to ``work[1] - 1``."""
@@ -612,7 +481,7 @@ def body_axes_runge_kutta_threaded_unestimated(y, work, model, effects, time, h,
                                  True, False, error, fsal, continuing)
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def world_axes_runge_kutta_threaded_unestimated(y, work, model, effects, time, h, substeps, method,
                                                 error, fsal, continuing):
     """:func:`world_axes_runge_kutta_per_body_unestimated` on ``work[0]`` to ``work[1] - 1``."""
@@ -650,10 +519,9 @@ class ExplicitRungeKutta(Integrator):
         self._method = self.tableau.method()
         self.evaluations_per_step = len(self.tableau.b)
         count = self.bodies.count
-        # Effects that each act on one body let a block of bodies go through all stages in
-        # lanes (:func:`_runge_kutta_per_body`): one pass over the state instead of several
-        # per stage (all of it, at large N), in vector instructions. ``per_body`` False
-        # forces the other order (tests).
+        # Effects that each act on one body let a body go through all stages in registers:
+        # one pass over the state instead of several per stage (all of it, at large N), and
+        # no scratch arrays to pass. ``per_body`` False forces the other order (tests).
         if per_body is None:
             per_body = acts_per_body(system.effect_parameters())
         self._work = () if per_body else (
