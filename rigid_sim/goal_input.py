@@ -15,10 +15,10 @@ A solve is Newton's method over flights of the world, from many starts: its work
 is the body-steps of one flight (steps times bodies) times the flights it may take, which
 no step count bounds. With a wall clock a goal is solved in the tick only where that worst
 case stays under ``INLINE_WORK``; the rest run in a worker thread on a snapshot of the world
-taken at the tick, so
-that a goal never holds up /clock or control. The world has moved on by the time the answer
-comes, so it is re-anchored at the tick that applies it: solved again from the world as it
-is then, from the worker's solution and Jacobian only (no restarts), which takes a few
+taken at the tick, so that a goal never holds up /clock or control. The world has moved on
+by the time the answer comes, so it is re-anchored at the tick that applies it: solved
+again from the world as it is then, from the worker's solution and Jacobian only (no
+restarts), which takes a few
 one-copy flights where the first solve took many. Where that does not converge, the goal
 goes back to the worker from the world as it is then, at most ``CHASES`` times; where even
 one flight is above ``INLINE_WORK`` (a large world, a far goal), it is refused, saying so.

@@ -32,6 +32,7 @@ from rigid_sim.qos_overrides import QUEUE_DEPTH
 WARNING_PERIOD = 2.0  # s of wall time between two warnings about refused inputs
 DEMAND_REFRESH = 0.5  # s of wall time between two looks for new set_pose/set_twist publishers
 STATE_TOPICS = (('set_pose', PoseStamped), ('set_twist', TwistStamped))
+INPUT_KINDS = dict(STATE_TOPICS, wrench=WrenchStamped)   # topic -> message type
 DRAIN_LIMIT = 100    # messages one callback takes from its queue (the queue holds 10)
 MAX_PENDING = 1000   # distinct (body, topic, frame_id) waiting for one tick
 
@@ -190,8 +191,7 @@ class BodyInputs:
 
     def _subscribe_awaited(self, name):
         topic, index = self._awaited.pop(name)
-        kind = dict(STATE_TOPICS, wrench=WrenchStamped)[topic]
-        self._subscribe(kind, topic, index, self._names[index])
+        self._subscribe(INPUT_KINDS[topic], topic, index, self._names[index])
 
     def topics(self):
         """Fully qualified names of every input topic, subscribed to or awaited."""

@@ -83,10 +83,10 @@ class SimulationInterfaces:
                 (srv.StepSimulation, 'step_simulation', self._on_step),
                 (srv.ResetSimulation, 'reset_simulation', self._on_reset)):
             deferred.create_service(node, kind, f'~/{name}', callback)
-        # Its services keep a burst of requests, as the node's own do (deferred.SERVICE_QOS):
-        # with rclpy's default of 10 the goals of a burst beyond it were dropped unanswered.
         self.refused_goals = 0
         self._goal_running = False
+        # Its services keep a burst of requests, as the node's own do (deferred.SERVICE_QOS):
+        # with rclpy's default of 10 the goals of a burst beyond it were dropped unanswered.
         self.action = ActionServer(node, SimulateSteps, '~/simulate_steps', self._execute,
                                    goal_callback=self._admit,
                                    cancel_callback=lambda goal: CancelResponse.ACCEPT,
