@@ -252,5 +252,47 @@ def test_answers_in_the_making_are_bounded_and_one_more_is_refused(rigid_sim, mo
     assert all(a.result.result == Result.RESULT_OK for a in answers[:2])
     for refused in answers[2:]:
         assert refused.result.result == Result.RESULT_OPERATION_FAILED
-        assert 'answers are being built, at most 2 at once' in refused.result.error_message
+        assert 'answers are being built or sent, at most 2 at once' in refused.result.error_message
         assert list(refused.states) == [] and list(refused.entities) == []
+
+
+def test_answers_built_but_not_yet_sent_count_against_the_bound(rigid_sim, monkeypatch):
+    """An answer holds its states until sent: built but unsent, it still takes a place.
+
+    The sending thread is held at its first answer. With a bound of 2, two answers built
+    (one held in the send, one waiting for it) leave no place: a third call is refused at
+    once, saying why, and the two are answered in full once the send is let go.
+    """
+    from rigid_sim import deferred
+    from rigid_sim.deferred import SERVICE_QOS
+    from simulation_interfaces.msg import Result
+    from simulation_interfaces.srv import GetEntitiesStates
+    monkeypatch.setattr('rigid_sim.entity_services.SLICE', 1e-6)
+    monkeypatch.setattr('rigid_sim.entity_services.MAX_BUILDING', 2)
+    held, go = threading.Event(), threading.Event()
+    deliver = deferred.Reply._deliver
+
+    def held_deliver(reply):
+        held.set()
+        go.wait(TIMEOUT)
+        deliver(reply)
+
+    monkeypatch.setattr(deferred.Reply, '_deliver', held_deliver)
+    sim = rigid_sim(yaml=MANY, rate=0.0, start_paused=True)
+    client = sim.create_node('client').create_client(
+        GetEntitiesStates, sim.topic('get_entities_states'), qos_profile=SERVICE_QOS)
+    spin_until(sim.executor, client.service_is_ready, what='service get_entities_states')
+    calls = [client.call_async(GetEntitiesStates.Request()) for _ in range(2)]
+    spin_until(sim.executor, held.is_set, what='the first answer held in its send')
+    spin_until(sim.executor, lambda: sim.node.sim_interfaces.entities._builds.idle,
+               what='the second answer built')
+    third = client.call_async(GetEntitiesStates.Request())
+    spin_until(sim.executor, third.done, what='the third call answered')
+    refused = third.result()
+    assert refused.result.result == Result.RESULT_OPERATION_FAILED
+    assert '2 answers are being built or sent, at most 2 at once' in refused.result.error_message
+    assert not any(call.done() for call in calls)
+    go.set()
+    spin_until(sim.executor, lambda: all(call.done() for call in calls),
+               what='both held answers sent', timeout=TIMEOUT)
+    assert [len(call.result().states) for call in calls] == [1000, 1000]
