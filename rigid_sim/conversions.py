@@ -105,8 +105,14 @@ class StateMessages:
         keep their last values.
         """
         to_time(snapshot.time, self.stamp)
-        # [origin, orientation, world twist, body-axes twist (REP-105: odometry's)] per body.
-        rows = snapshot.frames.tolist()
+        # [origin, orientation, world twist, body-axes twist (REP-105: odometry's)] per body,
+        # as Python rows only for the bodies posed: 10 000 rows at every publication were a
+        # quarter of the node's time with 5000 of its bodies heard.
+        frames = snapshot.frames
+        if len(posed) < len(frames):
+            rows = dict(zip(posed, frames[list(posed)].tolist()))
+        else:
+            rows = frames.tolist()
         for index in posed:
             _set_pose(self.poses[index].pose, rows[index][0:7])
         for index in moving:

@@ -13,7 +13,7 @@ import time
 
 from rclpy.node import Node
 
-from rigid_sim import parameters, sim_interfaces
+from rigid_sim import on_demand, parameters, sim_interfaces
 from rigid_sim.clock_output import ClockOutput
 from rigid_sim.control import SimControl
 from rigid_sim.core.compile_cache import caching_note
@@ -145,6 +145,7 @@ class RigidSimNode(Node):
         self._ticking = None   # the TickInProgress the loop left part-done, if any
         self.qos_overrides = QosOverrides(self)
         self.clock = ClockOutput(self.qos_overrides)
+        self.topic_listing = on_demand.TopicListing(self)   # shared by the on-demand topics
         self.outputs = StateOutputs(self, self.scene, self.settings.world_frame,
                                     self.settings.frame_prefix,
                                     self.settings.per_body_topics_limit)

@@ -18,3 +18,29 @@ def test_a_look_makes_what_a_slice_allows_and_leaves_the_rest(monkeypatch):
     assert made == ['a', 'b', 'c']   # past the slice after the third
     made.clear()
     assert on_demand.make_for_a_slice(['d', 'e'], make) and made == ['d', 'e']
+
+
+class CountingNode:
+    """Lists a graph whose topics are set by the test, counting the listings."""
+
+    def __init__(self):
+        self.topics, self.listings = [], 0
+
+    def get_topic_names_and_types(self):
+        self.listings += 1
+        return [(name, ['geometry_msgs/msg/PoseStamped']) for name in self.topics]
+
+
+def test_looks_within_a_listing_age_share_one_listing_of_the_graph(monkeypatch):
+    clock = [100.0]
+    monkeypatch.setattr(on_demand, 'monotonic', lambda: clock[0])
+    node = CountingNode()
+    listing = on_demand.TopicListing(node)
+    node.topics = ['/a']
+    awaited = {'/a': 0, '/b': 1}
+    assert on_demand.appeared(listing, awaited) == {'/a'}
+    node.topics = ['/a', '/b']
+    clock[0] += 0.5 * on_demand.LISTING_AGE   # a second consumer's look, soon after
+    assert on_demand.appeared(listing, awaited) == {'/a'} and node.listings == 1
+    clock[0] += 0.5 * on_demand.LISTING_AGE   # the listing is old now: listed again
+    assert on_demand.appeared(listing, awaited) == {'/a', '/b'} and node.listings == 2
