@@ -89,7 +89,7 @@ def _runge_kutta_in_lanes(y, first_body, end, model, effects, time, h, substeps,
                     if stage == b.size:
                         big_l = lanes.lane3(s, _WORLD_L, j)
                     else:
-                        big_l = kinematics.rotate(_kin.matrix(q), angular)
+                        big_l = kinematics.rotate(kinematics.matrix(q), angular)
                     force, torque = body_wrench(effects, base + min(j, count - 1), x, q, p,
                                                 big_l, at, model)
                     lanes.put3(s, _WRENCH, j, force)
@@ -107,7 +107,7 @@ def _runge_kutta_in_lanes(y, first_body, end, model, effects, time, h, substeps,
     return first, largest
 
 
-@helper(inline='always')
+@helper
 def _gather_lanes(s, y, fsal, model, base, count, dt, estimated):
     """Bodies ``base`` on into the lanes: state (internal layout), first slope, scales, inertia.
 
@@ -116,7 +116,7 @@ def _gather_lanes(s, y, fsal, model, base, count, dt, estimated):
     for j in range(LANES):
         i = base + min(j, count - 1)
         x, q, p, big_l = kinematics.body_state(y, i)
-        angular = kinematics.rotate_inverse(_kin.matrix(q), big_l)
+        angular = kinematics.rotate_inverse(kinematics.matrix(q), big_l)
         lanes.put_state(s, _SUM, j, (x, q, p, angular))
         lanes.put3(s, _WORLD_L, j, big_l)
         lanes.put_state(s, _SLOPE, j, kinematics.body_state(fsal, i))
@@ -127,7 +127,7 @@ def _gather_lanes(s, y, fsal, model, base, count, dt, estimated):
             s[_TOTAL * LANES + j] = 0.0
 
 
-@helper(inline='always')
+@helper(error_model='numpy')
 def _first_stage_lanes(s, weight, estimate_weight):
     """Start a substep: the sums at the state plus ``weight`` times the first slope.
 
@@ -143,7 +143,7 @@ def _first_stage_lanes(s, weight, estimate_weight):
         _add_slope_lanes(s, _ESTIMATE, estimate_weight)
 
 
-@helper(inline='always')
+@helper(error_model='numpy')
 def _stage_lanes(s, step):
     """Put the stage ``start + step slope`` into the stage's rows."""
     for j in range(LANES):
@@ -151,7 +151,7 @@ def _stage_lanes(s, step):
                                                      lanes.state(s, _SLOPE, j)))
 
 
-@helper(inline='always')
+@helper(error_model='numpy')
 def _end_lanes(s):
     """Make the step's end as its last evaluation sees it: ``q`` normalised, ``L`` turned.
 
@@ -168,7 +168,7 @@ def _end_lanes(s):
         lanes.put3(s, _WORLD_L, j, big_l)
 
 
-@helper(inline='always')
+@helper(error_model='numpy')
 def _slope_lanes(s, over_a21):
     """Each lane's slope at its stage and wrench; ``over_a21`` not 0: the rate from them.
 
@@ -201,7 +201,7 @@ def _add_slope_lanes(s, row, weight):
                                                   lanes.state(s, _SLOPE, j)))
 
 
-@helper(inline='always')
+@helper(error_model='numpy')
 def _close_estimate_lanes(s, weight, rate_weight):
     """Add each lane's estimate of the substep, its terms plus ``weight`` times the end slope."""
     for j in range(LANES):
@@ -212,7 +212,7 @@ def _close_estimate_lanes(s, weight, rate_weight):
                          lanes.lane3(s, _SCALES, j)), rate_weight, s[_RATE * LANES + j])
 
 
-@helper(inline='always')
+@helper
 def _check_lanes(s, y, fsal, base, count, k, first, alive):
     """Check each living lane after substep ``k``; return the failure code and the living.
 
@@ -232,7 +232,7 @@ def _check_lanes(s, y, fsal, base, count, k, first, alive):
     return first, alive
 
 
-@helper(inline='always')
+@helper
 def _store_lanes(s, y, fsal, error, base, count, alive, estimated, largest):
     """Store the living lanes' states and end slopes, every lane's estimate; the largest."""
     for j in range(count):
@@ -254,7 +254,7 @@ def _store_lanes(s, y, fsal, error, base, count, alive, estimated, largest):
 # the bodies it takes.
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def runge_kutta_in_lanes(y, work, model, effects, time, h, substeps, method, error, fsal,
                          continuing):
     """:func:`_runge_kutta_in_lanes` of bodies ``work[0]`` to ``work[1] - 1``."""
@@ -262,7 +262,7 @@ def runge_kutta_in_lanes(y, work, model, effects, time, h, substeps, method, err
                                  method, True, error, fsal, continuing)
 
 
-@kernel(nogil=True, error_model='numpy')
+@kernel(nogil=True)
 def runge_kutta_in_lanes_unestimated(y, work, model, effects, time, h, substeps, method, error,
                                      fsal, continuing):
     """:func:`_runge_kutta_in_lanes` of bodies ``work[0]`` to ``work[1] - 1``, no estimate."""
