@@ -62,7 +62,7 @@ def _advance(integrator, world, state, dt, substeps):
 
 
 def _in_lanes_and_a_body_at_a_time(world):
-    """The world's ``rk4`` in lanes and a body at a time (both for all its bodies)."""
+    """Return the world's ``rk4`` in lanes and a body at a time (both for all its bodies)."""
     lanes = REGISTRY['rk4'](world, 1e-6, in_lanes=True)
     assert lanes._kernel._dispatcher is rk4_lanes.runge_kutta_in_lanes
     return lanes, REGISTRY['rk4'](world, 1e-6, in_lanes=False)

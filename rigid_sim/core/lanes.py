@@ -9,8 +9,7 @@ is a flat scratch array of rows, row ``r`` of lane ``j`` at ``r * LANES + j``: a
 the lanes reads and writes at offsets known when compiling, and LLVM turns it into vector
 instructions across the bodies (docs/performance.md, "Bodies in lanes"). The loops must
 call nothing that is not inlined, and nothing that may raise (a division under numba's
-default error model does): what they call is compiled ``inline='always'`` and the kernels
-with ``error_model='numpy'`` (:mod:`~rigid_sim.core.integrators.rk4_lanes`).
+default error model does): :mod:`~rigid_sim.core.integrators.rk4_lanes` says how.
 
 A body's quantities are read and written as the tuples :mod:`~rigid_sim.core.kinematics`
 uses; a state or slope (x, q, P, L) takes 13 rows. Each accessor is written out, element by
@@ -21,10 +20,10 @@ from rigid_sim.core.compiled import helper
 
 # Bodies side by side: 8 doubles fill an AVX-512 register; 16 measured the same, 4 slower.
 LANES = 8
-# Bodies from which ``rk4`` steps them in lanes: below, the kernel in lanes, which compiles
-# several times longer, gains too little to pay for it (docs/performance.md, "Bodies in
-# lanes").
-LANES_MIN = 64
+# Bodies from which ``rk4`` steps them in lanes: 19 % faster a step there, 6-12 % with 8 to
+# 16 bodies, too little to pay the kernel's few seconds of compiling at a cold start
+# (docs/performance.md, "Bodies in lanes").
+LANES_MIN = 32
 
 
 @helper(inline='always')

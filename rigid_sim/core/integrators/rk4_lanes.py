@@ -3,25 +3,27 @@
 """``rk4`` for many bodies: blocks of bodies side by side, in vector instructions.
 
 The per-body kernel of :mod:`~rigid_sim.core.integrators.runge_kutta` takes one body at a
-time through a step in registers, in scalar instructions. Here :data:`~rigid_sim.core.lanes.
-LANES` bodies at a time go through all their substeps and stages side by side in a scratch
-of rows (:mod:`~rigid_sim.core.lanes`), so LLVM vectorises the stages' arithmetic across
-them; only the wrench (any effect's code) and the checks go a body at a time. Each lane does
-the arithmetic the per-body kernel does for its body, in the same order, so the two agree to
-the last bit (test_lanes).
+time through a step in registers, in scalar instructions. Here ``LANES`` (8) bodies at a
+time go through all their substeps and stages side by side in a scratch of rows
+(:mod:`~rigid_sim.core.lanes`), so LLVM vectorises the stages' arithmetic across them; only
+the wrench (any effect's code), the checks and the copies in and out go a body at a time.
+Each lane does the arithmetic the per-body kernel does for its body, in the same order, so
+the two agree to the last bit (test_lanes).
 
-It pays from :data:`~rigid_sim.core.lanes.LANES_MIN` bodies on, and its kernels compile
-several times longer than the per-body ones (docs/performance.md, "Bodies in lanes"): the
-integrator imports this module and compiles them only for a scene that large, so a small
-one compiles what it did without them. ``rk4`` only (body-axes momenta): ``rk4_world`` and
-``euler`` keep the per-body kernel.
+It pays from ``LANES_MIN`` bodies on, and compiles for several seconds more than the
+per-body kernel (docs/performance.md, "Bodies in lanes"): the integrator imports this module
+and compiles its kernel only for a scene that large, so a small one compiles what it did
+without it. ``rk4`` only (body-axes momenta): ``rk4_world`` and ``euler`` keep the per-body
+kernel.
 
-What the lanes' loops call must be inlined into them by numba, and nothing in them may
-raise: the loops call :func:`~rigid_sim.core.compiled.inlined` copies of the helpers the
-per-body kernel calls (the helpers themselves stay calls, which compile faster), and the
-kernels use numba's 'numpy' error model: a division by zero gives an infinity or NaN, which
-the substep's check reports as a non-finite state, instead of a branch to raise
-ZeroDivisionError in every lane's loop, which LLVM cannot vectorise.
+A loop over the lanes vectorises only if it calls nothing and nothing in it may raise.
+So each such loop is in a helper compiled with numba's 'numpy' error model (a division by
+zero gives an infinity or NaN, which the substep's check reports as a non-finite state,
+instead of a branch to raise ZeroDivisionError, which LLVM cannot vectorise), and calls
+:func:`~rigid_sim.core.compiled.inlined` copies of the helpers the per-body kernel calls,
+which themselves stay calls there (numba's inlining is what compiles slowly). These helpers
+take only the scratch and numbers: they are compiled once and shared by both kernels and
+every scene's effects, whose own code is in the kernel.
 """
 import math
 
@@ -35,7 +37,8 @@ from rigid_sim.core.integrators import runge_kutta as rk
 from rigid_sim.core.integrators.internal_state import derivative
 from rigid_sim.core.lanes import LANES
 
-# The helpers LLVM left as calls in the lanes' loops, or that divide: inlined copies.
+# The helpers LLVM left as calls in the lanes' loops, or that divide: inlined copies
+# (``matrix``, ``multiply`` and ``normalize`` also where ``derivative`` calls them).
 _kin = inlined_module(kinematics, 'matrix', 'multiply', 'normalize')
 _derivative = inlined(derivative, kin=_kin)
 _scaled_size = inlined(scaled_size)
@@ -54,15 +57,15 @@ _INERTIA, _INVERSE_MASS, _ROWS = 79, 88, 89
 @helper(inline='always')
 def _runge_kutta_in_lanes(y, first_body, end, model, effects, time, h, substeps, method,
                           estimated, error, fsal, continuing):
-    """The per-body kernel's step of bodies ``first_body`` to ``end - 1``, in lanes.
+    """Step bodies ``first_body`` to ``end - 1`` as the per-body kernel does, in lanes.
 
     Arguments and result those of :func:`~rigid_sim.core.integrators.runge_kutta.
     _runge_kutta_per_body` (body axes). A block at the end with fewer bodies fills its
     other lanes with its last body, never stored. A body that fails a substep stops there:
     the failure code of the earliest bad substep over the bodies (the first such body's
-    sign) is returned. One function with inlined parts on purpose: a call, even inlined by
-    LLVM, took and dropped references to every array of ``model`` and ``effects``
-    (docs/performance.md, "A body at a time").
+    sign) is returned. The effects' wrench is evaluated here, inlined, a body at a time: a
+    call would take and drop references to every array of ``effects`` for every body
+    (docs/performance.md, "A body at a time"); the lanes' parts are calls once a stage.
     """
     a, b, c, e, e_end, rate_weight = method
     over_a21 = 1.0 / a[1] if b.size > 1 else 0.0   # for the rate: once, not for every body
@@ -193,6 +196,9 @@ def _lane_slope(s, j):
                        s[_INVERSE_MASS * LANES + j], True)
 
 
+# Inlined where it is called, with ``row`` a constant there: as a helper of its own, the row
+# an argument, LLVM cannot tell the rows it writes from the slope's it reads, and the loop
+# stayed scalar.
 @helper(inline='always')
 def _add_slope_lanes(s, row, weight):
     """Add ``weight`` times the slope at hand to the 13 rows from ``row``."""
