@@ -520,6 +520,8 @@ class ExplicitRungeKutta(Integrator):
     """Integrate with the stages of ``tableau`` on world (``body_axes`` False) or body momenta.
 
     The tableau's stages each use only the slope before (see :meth:`Tableau.chained`).
+    ``per_body`` and ``in_lanes`` (None: chosen by the effects and the body count) force
+    the kernel's loop order, for tests: a body at a time, or blocks of bodies in lanes.
     """
 
     tableau = None
