@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigid_sim.core import dispatch
+from rigid_sim.core import dispatch, error_estimate, kinematics
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.inputs import AppliedWrenches
-from rigid_sim.core.integrators import REGISTRY, rk4_lanes, runge_kutta
+from rigid_sim.core.integrators import internal_state, REGISTRY, rk4_lanes, runge_kutta
 from rigid_sim.core.lanes import LANES, LANES_MIN
 from rigid_sim.core.state import initial_state, RigidBodies
 from rigid_sim.core.world import World
@@ -155,3 +155,25 @@ def test_only_rk4_on_many_bodies_steps_in_lanes():
         kernel_of('rk4_world', LANES_MIN, in_lanes=True)
     with pytest.raises(ValueError, match='effects that each act on one body'):
         kernel_of('rk4', LANES_MIN, per_body=False, in_lanes=True)
+
+
+def test_only_the_lanes_inline_the_helpers_they_call():
+    """The helpers stay calls for every other kernel; the lanes inline copies of the same code.
+
+    numba's inlining is what made every kernel compile about 3x longer when these helpers
+    were inlined everywhere (docs/performance.md, "Bodies in lanes"); the copies run the
+    very code of the helpers, so the arithmetic, and the bits, are theirs.
+    """
+    copies = {rk4_lanes._kin.matrix: kinematics.matrix,
+              rk4_lanes._kin.multiply: kinematics.multiply,
+              rk4_lanes._kin.normalize: kinematics.normalize,
+              rk4_lanes._derivative: internal_state.derivative,
+              rk4_lanes._scaled_size: error_estimate.scaled_size,
+              rk4_lanes._turning_part: error_estimate.turning_part}
+    for copy, original in copies.items():
+        assert original.targetoptions.get('inline', 'never') == 'never'
+        assert copy.targetoptions['inline'] == 'always'
+        assert copy.py_func.__code__ is original.py_func.__code__
+    assert rk4_lanes._derivative.py_func.__globals__['kin'] is rk4_lanes._kin
+    assert rk4_lanes._kin.rotate is kinematics.rotate   # left to LLVM, which inlines it
+    assert runge_kutta._squared_ratio.targetoptions.get('inline', 'never') == 'never'
