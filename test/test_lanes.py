@@ -7,8 +7,9 @@ whatever block a body falls in (a full one, or the part-full last one whose spar
 repeat its last body) and whatever range a thread steps, every bit of the state, the end
 slopes and the error estimates agrees; a body that goes bad stops where it does there. The
 per-body kernel is itself checked against the stage-by-stage one (test_fast_paths), and that
-against closed forms (test_integrators). One kernel in lanes is compiled here, for one scene:
-it compiles several times longer than the per-body one (docs/performance.md).
+against closed forms (test_integrators). The two kernels in lanes, with and without the
+estimate, are compiled here for one scene: they compile seconds longer than the per-body
+ones (docs/performance.md).
 """
 import math
 
@@ -90,6 +91,25 @@ def test_rk4_in_lanes_equals_a_body_at_a_time_in_every_block():
     assert continued == [0, 0]
     np.testing.assert_array_equal(got[1], expected[1])
     np.testing.assert_array_equal(lanes.error, one_at_a_time.error)
+
+
+def test_rk4_in_lanes_without_estimates_equals_a_body_at_a_time():
+    """A World that reads no estimate steps in lanes without one: the same bits.
+
+    Its kernel shares the lanes' parts with the estimating one and leaves the estimates
+    alone (NaN as the largest, as a body at a time).
+    """
+    world = _scene()
+    lanes = REGISTRY['rk4'](world, 1e-6, estimates=False, in_lanes=True)
+    assert lanes._kernel._dispatcher is rk4_lanes.runge_kutta_in_lanes_unestimated
+    one_at_a_time = REGISTRY['rk4'](world, 1e-6, estimates=False, in_lanes=False)
+    got = _advance(lanes, world, world.y, 0.05, 3)
+    expected = _advance(one_at_a_time, world, world.y, 0.05, 3)
+    assert got[0] == expected[0] == 0
+    np.testing.assert_array_equal(got[1], expected[1])
+    np.testing.assert_array_equal(got[2], expected[2])
+    assert math.isnan(got[4]) and math.isnan(expected[4])
+    assert not np.array_equal(got[1], world.y)
 
 
 def test_rk4_in_lanes_reports_the_earliest_bad_substep_over_the_blocks():
