@@ -9,7 +9,12 @@ function (one for Python callers, one for C callers) and optimise and emit machi
 both, about a quarter of the time a first start spends compiling (docs/performance.md,
 "Compile cost"); callers within compiled code never use them. A helper called from Python
 raises TypeError, as there is no wrapper to call.
+
+:func:`inlined` makes a copy of a helper that numba inlines into its callers, for the few
+kernels that need it without making every other caller pay for it.
 """
+from types import FunctionType, ModuleType
+
 from numba import njit, types
 from numba.core.registry import CPUDispatcher
 
@@ -50,3 +55,30 @@ def helper(function=None, **options):
             compiled.__class__ = CompiledOnly
         return compiled
     return decorate if function is None else decorate(function)
+
+
+def inlined(function, **names):
+    """Return a copy of the helper ``function`` that numba inlines where it is called.
+
+    numba inlines a function by copying its IR into every call and typing it again there,
+    which multiplies the compile time of a caller that calls it often; calls left to LLVM
+    cost nothing to compile but may stay calls, which a loop meant to vectorise cannot hold
+    (docs/performance.md, "Bodies in lanes"). So the helpers stay as they are for every
+    kernel, and a kernel whose loops need them inlined calls copies made here: the same
+    code (so the same arithmetic), compiled into the caller with the caller's options.
+    ``names`` replace globals the copy reads, such as a module by :func:`inlined_module`,
+    so that what the copy calls in turn is inlined as well.
+    """
+    original = function.py_func
+    copy = FunctionType(original.__code__, {**original.__globals__, **names},
+                        original.__name__, original.__defaults__, original.__closure__)
+    copy.__qualname__ = original.__qualname__
+    return helper(copy, inline='always')
+
+
+def inlined_module(module, *names):
+    """Return a module with ``module``'s attributes, its helpers ``names`` :func:`inlined`."""
+    copy = ModuleType(module.__name__, module.__doc__)
+    copy.__dict__.update(vars(module))
+    copy.__dict__.update({name: inlined(getattr(module, name)) for name in names})
+    return copy

@@ -22,6 +22,7 @@ from rigid_sim.core.integrators.base import Integrator
 from rigid_sim.core.integrators.internal_state import (add_slope, derivative, set_stage,
                                                        slope_of, to_internal, to_public)
 from rigid_sim.core.integrators.substeps import substeps_checked
+from rigid_sim.core.lanes import LANES_MIN
 
 
 @dataclass(frozen=True)
@@ -504,17 +505,30 @@ THREADED = {(True, True): body_axes_runge_kutta_threaded,
             (False, False): world_axes_runge_kutta_threaded_unestimated}
 
 
+def lanes_kernel(estimated):
+    """Return the kernel that steps bodies in lanes (``rk4``: body-axes momenta).
+
+    Its module is imported here, by the first integrator that uses it: it builds on this
+    one, and a process that never steps :data:`~rigid_sim.core.lanes.LANES_MIN` bodies
+    never imports it.
+    """
+    from rigid_sim.core.integrators import rk4_lanes
+    return rk4_lanes.KERNELS[estimated]
+
+
 class ExplicitRungeKutta(Integrator):
     """Integrate with the stages of ``tableau`` on world (``body_axes`` False) or body momenta.
 
     The tableau's stages each use only the slope before (see :meth:`Tableau.chained`).
+    ``per_body`` and ``in_lanes`` (None: chosen by the effects and the body count) force
+    the kernel's loop order, for tests: a body at a time, or blocks of bodies in lanes.
     """
 
     tableau = None
     body_axes = False
     estimate_optional = True
 
-    def __init__(self, system, tolerance=1e-6, estimates=True, per_body=None):
+    def __init__(self, system, tolerance=1e-6, estimates=True, per_body=None, in_lanes=None):
         super().__init__(system, tolerance, estimates)
         self._method = self.tableau.method()
         self.evaluations_per_step = len(self.tableau.b)
@@ -528,10 +542,24 @@ class ExplicitRungeKutta(Integrator):
             np.empty((count, 13)), np.empty((count, 13)), np.empty((count, 3)), self._force,
             self._torque, np.empty((count, 13)), np.empty((count, 3)), np.zeros(count))
         self._end_slopes = np.zeros((count, 13))   # first same as last: the next step's first
-        self._kernel = CompiledCall(KERNELS[self.body_axes, per_body, self.estimates])
-        if per_body:
-            self._kernel = across_threads(self._kernel, THREADED[self.body_axes, self.estimates],
-                                          count)
+        # Many bodies on body-axes momenta (rk4): blocks of them in lanes, the same bits.
+        # ``in_lanes`` True or False forces the choice (tests).
+        if in_lanes is None:
+            in_lanes = per_body and self.body_axes and count >= LANES_MIN
+        if in_lanes and not (per_body and self.body_axes):
+            raise ValueError(f'{self.name} cannot step these bodies in lanes: the kernel in '
+                             'lanes is for body-axes momenta (rk4) and effects that each act '
+                             'on one body')
+        if not per_body:
+            self._kernel = CompiledCall(KERNELS[self.body_axes, False, self.estimates])
+        elif in_lanes:
+            self._work = (0, count)   # the kernel's range of bodies: all of them
+            self._kernel = across_threads(CompiledCall(lanes_kernel(self.estimates)),
+                                          lanes_kernel(self.estimates), count)
+        else:
+            self._kernel = across_threads(
+                CompiledCall(KERNELS[self.body_axes, True, self.estimates]),
+                THREADED[self.body_axes, self.estimates], count)
 
     def _advance(self, y, time, h, substeps, effects, continuing):
         return self._kernel(y, self._work, self.bodies.model, effects, time, h, substeps,
