@@ -30,6 +30,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
+from rigid_sim.core import goal_lattice
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
@@ -79,11 +80,12 @@ TURN_STARTS = 6
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
-# deflated solves.
+# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound).
 # The node decides by it whether a goal is solved in the tick.
-WORST_FLIGHTS = 2 * (MAX_ITERATIONS * (RESTARTS + 3)
-                     + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
-                                            + DEFLATED_STARTS + TURN_STARTS))
+WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 3)
+                      + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
+                                             + DEFLATED_STARTS + TURN_STARTS))
+                 + goal_lattice.WORST_FLIGHTS)
 
 
 @dataclass(frozen=True)
@@ -339,6 +341,8 @@ class GoalSolver:
         problem.fly_on(problem.fine)
         if problem.exact and problem.goal.unknowns in CONTINUED:
             best = self._deflated(problem, best, (problem.current, first))
+        if problem.wrench and problem.coarse is not None:
+            best = goal_lattice.nearer(problem, best)
         return best
 
     def _restarted(self, problem, first):
