@@ -25,6 +25,10 @@ TURNS = (1, -1, 2, -2, 3, -3, 4, -4)   # whole turns about the sensitive directi
 ROUNDS = 4         # walks on from a nearer solution at most
 ITERATIONS = 10    # of Newton from each start, on the coarse flight
 NEARER = 1e-9      # relative: a solution nearer by less is the same distance
+# A start's iterates farther than this times the nearest distance are abandoned: the
+# force, unique, holds every solution within a few per cent of the nearest, so an
+# iterate beyond has jumped along the insensitive directions of the torque.
+SLACK = 1.02
 # Flights the walk may fly: the solution continued onto the coarse flight, each start of
 # each round (one flight for the first iterate's differences, one per iteration), the
 # polish on the fine flight.
@@ -43,11 +47,15 @@ def _starts(problem, newton):
     return starts
 
 
-def _converged(problem, start):
-    """Newton from ``start`` on the coarse flight, or None where it does not converge."""
+def _converged(problem, start, reach=np.inf):
+    """Newton from ``start`` on the coarse flight, or None where it does not converge.
+
+    Or where an iterate is farther than ``reach`` by the metric.
+    """
     newton = Newton(problem, start)
     try:
-        newton.converge(COARSE_TOLERANCE, iterations=ITERATIONS)
+        newton.converge(COARSE_TOLERANCE, lambda values: problem.distance(values) <= reach,
+                        ITERATIONS)
     except NoConvergence:
         return None
     return newton
@@ -63,7 +71,8 @@ def nearer(problem, best):
     nearest = problem.distance(best.values)
     walked = None
     for _ in range(ROUNDS if here is not None else 0):
-        found = [_converged(problem, start) for start in _starts(problem, here)]
+        found = [_converged(problem, start, SLACK * nearest)
+                 for start in _starts(problem, here)]
         found = [newton for newton in found if newton is not None]
         step = min(found, key=lambda newton: problem.distance(newton.values), default=None)
         if step is None or problem.distance(step.values) >= nearest * (1.0 - NEARER):
