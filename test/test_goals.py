@@ -422,10 +422,10 @@ HELD_WRENCHES = {
 
 
 def oracle_held_pose(wrench, until):
-    """The box's origin (3,) and orientation (4,) at ``until`` under gravity and ``wrench``.
+    """Return the box's origin (3,) and orientation (4,) at ``until`` under ``wrench``.
 
     ``wrench`` (6,): a force and a torque about the centre of mass, world axes, held from
-    the start, on the box of BOX.
+    the start, on the box of BOX under gravity.
     """
     gravity = oracle_wrench({'gravity': {'acceleration': G.tolist()}})
 
@@ -441,7 +441,7 @@ def oracle_held_pose(wrench, until):
 
 
 def held_size(wrench, until):
-    """The metric of "nearest" for a wrench held ``until``: the impulse's norm.
+    """Return the metric of "nearest" of a wrench held ``until``: its impulse's norm.
 
     sqrt(|F T|^2 / m + (tau T) . I^-1 (tau T)), I the box's inertia at the start (the
     identity orientation), the square root of twice the kinetic energy it would give the

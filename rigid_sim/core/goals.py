@@ -11,7 +11,8 @@ forward differences of copies of the body flown together in one compiled call. O
 solutions it finds (by continuation from the current motion, from the current motion
 corrected by the least move that closes its gap, on the branches a whole turn away and,
 where a flight is one exact step, by deflation of those found,
-:mod:`~rigid_sim.core.goal_deflation`) it
+:mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
+the end orientation, :mod:`~rigid_sim.core.goal_lattice`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -297,7 +298,9 @@ class GoalSolver:
         Its neighbours a whole turn away about the candidate axes (``problem.whole_turns``)
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
-        BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried.
+        BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
+        the deflated solves (a flight of one exact step) or a held wrench's lattice walk
+        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`).
         """
         first = problem.first_iterate()
         found = []
