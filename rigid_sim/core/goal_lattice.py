@@ -12,7 +12,8 @@ pose lie about ``2 pi / sigma_1`` apart (0.003 N m) along that direction, while 
 From a solution ``u``, Newton is started at ``u + J^-1 (0, 2 pi n e_1)`` (``e_1`` the
 orientation's most sensitive direction, ``n`` a few whole turns either way): the linear
 model's spacing is rough over a whole turn, so the polish of the start at ``n = 1`` often
-fails or returns to ``u`` and one at ``n = 3`` reaches the next solution. The nearest
+fails or returns to ``u`` and one at ``n = 3`` reaches the next solution. Starts ACROSS
+rad along the two other directions reach the stretches of the lattice beside. The nearest
 found becomes ``u`` and the walk goes on. It runs on the coarse flight (several times
 fewer steps), and its nearest solution is polished on the fine flight, kept only if it
 converges nearer.
@@ -23,6 +24,9 @@ from rigid_sim.core.goal_newton import MAX_ITERATIONS, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
 
 TURNS = (1, -1, 2, -2, 3, -3, 4, -4)   # whole turns about the sensitive direction tried
+# rad, of the end orientation along each of the two other directions, both ways: where
+# the walk missed the nearest solution, it lay 1.2-1.5 rad across them (linear model).
+ACROSS = 1.5
 ROUNDS = 4         # walks on from a nearer solution at most
 ITERATIONS = 10    # of Newton from each start, on the coarse flight
 NEARER = 1e-9      # relative: a solution nearer by less is the same distance
@@ -33,17 +37,22 @@ SLACK = 1.02
 # Flights the walk may fly: the solution continued onto the coarse flight, each start of
 # each round (one flight for the first iterate's differences, one per iteration), the
 # polish on the fine flight.
-WORST_FLIGHTS = ((ROUNDS * len(TURNS) + 1) * (ITERATIONS + 1) + MAX_ITERATIONS + 1)
+WORST_FLIGHTS = ((ROUNDS * (len(TURNS) + 4) + 1) * (ITERATIONS + 1) + MAX_ITERATIONS + 1)
 
 
 def _starts(problem, newton):
-    """Return starts a whole turn or a few of the end orientation from ``newton``'s."""
+    """Return starts a whole turn or a few of the end orientation from ``newton``'s.
+
+    Along the most sensitive direction; then ACROSS along each of the other two.
+    """
     rows = len(newton.residual)
-    sensitive = np.linalg.svd(newton.jacobian[rows - 3:, problem.count - 3:])[0][:, 0]
+    axes = np.linalg.svd(newton.jacobian[rows - 3:, problem.count - 3:])[0].T
+    moves = [2.0 * np.pi * whole * axes[0] for whole in TURNS]
+    moves += [sign * ACROSS * axis for axis in axes[1:] for sign in (1.0, -1.0)]
     turn = np.zeros(rows)
     starts = []
-    for whole in TURNS:
-        turn[rows - 3:] = 2.0 * np.pi * whole * sensitive
+    for move in moves:
+        turn[rows - 3:] = move
         starts.append(newton.values + np.linalg.solve(newton.jacobian, turn))
     return starts
 
