@@ -105,8 +105,7 @@ class GoalInput:
         """Subscribe to every goal topic that has a publisher in the graph now."""
         if not self._awaited:
             return
-        on_demand.make_for_a_slice(on_demand.appeared(self._node.topic_listing, self._awaited),
-                                   self._subscribe)
+        on_demand.make_appeared(self._node.topic_listing, self._awaited, self._subscribe)
 
     def _subscribe(self, name):
         index = self._awaited.pop(name)

@@ -186,8 +186,7 @@ class BodyInputs:
         """Subscribe to every awaited input topic that has appeared in the graph."""
         if not self._awaited:
             return
-        on_demand.make_for_a_slice(on_demand.appeared(self._node.topic_listing, self._awaited),
-                                   self._subscribe_awaited)
+        on_demand.make_appeared(self._node.topic_listing, self._awaited, self._subscribe_awaited)
 
     def _subscribe_awaited(self, name):
         topic, index = self._awaited.pop(name)

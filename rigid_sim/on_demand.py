@@ -34,9 +34,12 @@ class TopicListing:
         return self._names
 
 
-def appeared(listing, awaited):
-    """Return the names among ``awaited`` (a dict keyed by topic name) in ``listing``."""
-    return listing.names() & awaited.keys()
+def make_appeared(listing, awaited, make):
+    """Call ``make(name)`` for ``awaited``'s names in ``listing``: :func:`make_for_a_slice`.
+
+    ``awaited`` is a dict keyed by topic name. Returns whether all were made.
+    """
+    return make_for_a_slice(listing.names() & awaited.keys(), make)
 
 
 def make_for_a_slice(names, make):

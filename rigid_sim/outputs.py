@@ -135,8 +135,8 @@ class StateOutputs:
 
         With more left, the next look is a BACKLOG_LOOK away, not a LISTENER_REFRESH.
         """
-        appeared = on_demand.appeared(self._node.topic_listing, self._awaited)
-        if not on_demand.make_for_a_slice(appeared, self._make_awaited):
+        if not on_demand.make_appeared(self._node.topic_listing, self._awaited,
+                                       self._make_awaited):
             self._listeners_due = time.monotonic() + BACKLOG_LOOK
 
     def _make_awaited(self, name):
