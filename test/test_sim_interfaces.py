@@ -257,14 +257,20 @@ def test_deleted_body_loses_its_topics_and_its_held_wrench(stopped):
     wrench = WrenchStamped()
     wrench.header.frame_id = 'world'
     wrench.wrench.force.z = 100.0
-    push.publish(wrench)
-    # The wrench and the step request travel on different topics, in no order DDS keeps:
-    # tick until the push has arrived (at 100 N on 2 kg it turns the fall around in a tick).
-    for _ in range(20):
+
+    def pushed_up():
+        """Push and tick once; whether the puck now rises.
+
+        The wrench and the step request travel on different topics, in no order DDS keeps,
+        and a new publisher's first sample can wait for its reader's discovery (seconds on a
+        loaded machine): push again each tick until one arrives. From then on 100 N on
+        2 kg (4.1 g up) turns any fall around within a few hundred ticks.
+        """
+        push.publish(wrench)
         assert sim.call('step_simulation', steps=1).result.result == OK
-        if state_of(sim, 'puck')[2][2] > 0.0:
-            break
-    assert state_of(sim, 'puck')[2][2] > 0.0   # the push held it up
+        return state_of(sim, 'puck')[2][2] > 0.0
+
+    sim.until(pushed_up, 'the push held the puck up')
     assert sim.call('delete_entity', entity='puck').result.result == OK
     assert sim.call('get_entities').entities == ['box', 'plate']
     sim.until(lambda: sim.node.count_publishers(f'{sim.prefix}/puck/pose') == 0,
