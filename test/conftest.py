@@ -3,7 +3,8 @@
 """Isolation for the tests that speak ROS.
 
 Every run gets its own ROS_DOMAIN_ID (from the pid, unless the user set one: then that
-one, so that runs the user keeps apart stay apart), discovery limited to this machine
+one, so that runs the user keeps apart stay apart; each pytest-xdist worker the next ones,
+:func:`own_domain`), discovery limited to this machine
 (docs/ros_notes.md: unset, DDS multicasts out of the network interface) and a temporary log
 directory, set here before any test starts rclpy or a node process. In-process tests narrow
 discovery further, to OFF. The node is driven through the public test kit (the
@@ -18,11 +19,11 @@ import tempfile
 
 import pytest
 
+from domains import own_domain
 import processes
 
 ROS_LOG_DIR = tempfile.mkdtemp(prefix='rigid_sim_test_logs_')
-if not os.environ.get('ROS_DOMAIN_ID', '').strip():
-    os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)  # 1..101: valid on Linux
+os.environ['ROS_DOMAIN_ID'] = str(own_domain(os.environ, os.getpid()))
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'  # subprocess tests need localhost
 os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated, and it overrides the range
 os.environ.pop('ROS_STATIC_PEERS', None)

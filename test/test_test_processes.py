@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+from domains import own_domain
 import processes
 
 HERE = Path(__file__).parent
@@ -27,11 +28,25 @@ GONE_TIMEOUT = 60.0     # s: a liveness bound for the kernel to end a killed gro
 def test_a_domain_id_the_user_set_is_kept():
     """conftest.py gives a run its own domain only where the user set none."""
     code = 'import os, conftest; print(os.environ["ROS_DOMAIN_ID"])'
+    environment = dict(os.environ, ROS_DOMAIN_ID='215', PYTHONPATH=os.pathsep.join(
+        [str(HERE), os.environ.get('PYTHONPATH', '')]))
+    environment.pop('PYTEST_XDIST_WORKER', None)   # the child is a run, not a worker
     run = subprocess.run([sys.executable, '-c', code], cwd=HERE, capture_output=True, text=True,
-                         env=dict(os.environ, ROS_DOMAIN_ID='215', PYTHONPATH=os.pathsep.join(
-                             [str(HERE), os.environ.get('PYTHONPATH', '')])), timeout=120)
+                         env=environment, timeout=120)
     assert run.returncode == 0, run.stderr
     assert run.stdout.split() == ['215']   # 215: not among the 1..101 conftest picks
+
+
+@pytest.mark.parametrize('chosen', ['', '7', '101', '215'])
+def test_the_workers_of_a_run_each_take_a_domain_of_their_own(chosen):
+    """Two or eight pytest-xdist workers: distinct domains, valid ones where the run's is."""
+    for workers in (2, 8):
+        domains = [own_domain({'ROS_DOMAIN_ID': chosen, 'PYTEST_XDIST_WORKER': f'gw{k}'},
+                              pid=4242) for k in range(workers)]
+        assert len(set(domains)) == workers
+        if chosen != '215':
+            assert all(1 <= domain <= 101 for domain in domains), domains
+    assert own_domain({'ROS_DOMAIN_ID': chosen}, pid=4242) == int(chosen or 1 + 4242 % 101)
 
 
 class Failed(Exception):
