@@ -31,7 +31,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_lattice
+from rigid_sim.core import goal_fold, goal_lattice
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
@@ -350,7 +350,16 @@ class GoalSolver:
             best = self._deflated(problem, best, (problem.current, first))
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
+        if not problem.wrench:
+            best = self._across_the_fold(problem, best)
         return best
+
+    def _across_the_fold(self, problem, best):
+        """Return ``best`` or the nearer solution across its fold (:mod:`goal_fold`)."""
+        def solve(start, reach):
+            return self._converged(problem, [(start, None)],
+                                   lambda u: problem.distance(u) <= reach, BRANCH_ITERATIONS)
+        return goal_fold.nearer(problem, best, solve, BRANCH_SLACK)
 
     def _restarted(self, problem, first):
         """Newton from the other starts, after the first solves found nothing.
