@@ -26,6 +26,7 @@ from rigid_sim.core.goal_newton import NoConvergence
 # at T = 2 s; at 0.5 and 1 rad/s the quadratic fits worse: 6 and 3 of the 12, against 7).
 STEP = 0.2
 FRACTIONS = (1.0, 0.5)   # of the quadratic's root, the starts tried in this order
+DIFFERENCES = 2   # flights: the two at u +- STEP v
 NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 
 

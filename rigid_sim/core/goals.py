@@ -82,15 +82,21 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
 # winds several turns, the targets' spread spans neighbouring branches, and the corrected
 # start may sit by a fold of the branch next to the target's (tumbling, T = 10 s).
 TURN_STARTS = 6
+# Flights of the starts across a twist solution's fold (:mod:`~rigid_sim.core.goal_fold`):
+# its two differences, then each start's, one for its first Jacobian and one an iteration,
+# twice over where a coarse flight comes first.
+FOLD_FLIGHTS = (goal_fold.DIFFERENCES
+                + 2 * len(goal_fold.FRACTIONS) * (BRANCH_ITERATIONS + 1))
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
-# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound).
-# The node decides by it whether a goal is solved in the tick.
+# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound)
+# or a twist's starts across its fold, never both. The node decides by it whether a goal
+# is solved in the tick.
 WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 3)
                       + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
                                              + DEFLATED_STARTS + TURN_STARTS))
-                 + goal_lattice.WORST_FLIGHTS)
+                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS))
 
 
 @dataclass(frozen=True)
