@@ -12,7 +12,8 @@ solutions it finds (by continuation from the current motion, from the current mo
 corrected by the least move that closes its gap, on the branches a whole turn away and,
 where a flight is one exact step, by deflation of those found,
 :mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
-the end orientation, :mod:`~rigid_sim.core.goal_lattice`) it
+the end orientation, :mod:`~rigid_sim.core.goal_lattice`; for a twist, across the fold
+beside the solution, :mod:`~rigid_sim.core.goal_fold`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -310,7 +311,9 @@ class GoalSolver:
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
-        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`).
+        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
+        for twist unknowns, the starts across the fold beside the nearest solution
+        (:meth:`_across_the_fold`).
         """
         first = problem.first_iterate()
         found = []
@@ -361,7 +364,11 @@ class GoalSolver:
         return best
 
     def _across_the_fold(self, problem, best):
-        """Return ``best`` or the nearer solution across its fold (:mod:`goal_fold`)."""
+        """Return ``best`` or the nearer solution across its fold.
+
+        :func:`~rigid_sim.core.goal_fold.nearer`, its starts solved as a branch's are
+        (coarse to fine, BRANCH_ITERATIONS, abandoned beyond BRANCH_SLACK of the nearest).
+        """
         def solve(start, reach):
             return self._converged(problem, [(start, None)],
                                    lambda u: problem.distance(u) <= reach, BRANCH_ITERATIONS)
