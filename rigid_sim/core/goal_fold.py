@@ -20,13 +20,17 @@ a farther solution, the one halfway to the known).
 """
 import numpy as np
 
-from rigid_sim.core.goal_newton import NoConvergence
+from rigid_sim.core.goal_newton import Newton, NoConvergence
+from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
 
 # m or rad of displacement at the goal's time: the differences' step along v (0.1 rad/s
 # at T = 2 s; at 0.5 and 1 rad/s the quadratic fits worse: 6 and 3 of the 12, against 7).
 STEP = 0.2
 FRACTIONS = (1.0, 0.5)   # of the quadratic's root, the starts tried in this order
 DIFFERENCES = 2   # flights: the two at u +- STEP v
+# Relative: a coarse solution farther than the nearest by more is not polished (the coarse
+# flight's own error moves a solution's distance by less, ~1e-3 of it).
+COARSE_MARGIN = 0.02
 NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 
 
@@ -44,23 +48,48 @@ def _across(problem, newton):
     return [values + fraction * root * direction for fraction in FRACTIONS]
 
 
-def nearer(problem, best, solve, slack):
+def _solved(problem, start, reach, nearest, iterations):
+    """Newton from ``start``, or None: coarse first, abandoned there unless near enough.
+
+    Where the flight has a coarse grid, a start whose coarse solution is more than
+    COARSE_MARGIN farther than ``nearest`` is not flown on the fine flight: most starts
+    return to the solution they left or go farther, and the fine flight costs the most.
+    NoConvergence where the iterations fail or leave ``reach`` by the metric.
+    """
+    def bound(values):
+        return problem.distance(values) <= reach
+
+    newton = Newton(problem, start)
+    if problem.coarse is not None:
+        problem.fly_on(problem.coarse)
+        newton.converge(COARSE_TOLERANCE, bound, iterations)
+        if problem.distance(newton.values) > nearest * (1.0 + COARSE_MARGIN):
+            return None
+        problem.fly_on(problem.fine)
+        newton.residual = None
+    newton.converge(TOLERANCE, bound, iterations)
+    return newton
+
+
+def nearer(problem, best, slack, iterations):
     """Return ``best`` (a converged Newton) or the solution across its fold, if nearer.
 
-    ``solve(start, reach)``: Newton from ``start`` abandoned beyond ``reach`` by the
-    metric, or NoConvergence. Starts predicted beyond ``slack`` times the nearest distance
-    are not tried.
+    Each start gets ``iterations`` (coarse, then fine) and is abandoned once an iterate
+    is farther than ``slack`` times the nearest distance; a start predicted beyond it
+    is not tried. ``problem`` is left flying the fine flight.
     """
     nearest = problem.distance(best.values)
     reach = slack * nearest
-    for start in _across(problem, best):
-        if problem.distance(start) > reach:
-            continue
-        try:
-            newton = solve(start, reach)
-        except NoConvergence:
-            continue
-        distance = problem.distance(newton.values)
-        if distance < nearest * (1.0 - NEARER):
-            return newton
+    try:
+        for start in _across(problem, best):
+            if problem.distance(start) > reach:
+                continue
+            try:
+                newton = _solved(problem, start, reach, nearest, iterations)
+            except NoConvergence:
+                continue
+            if newton is not None and problem.distance(newton.values) < nearest * (1.0 - NEARER):
+                return newton
+    finally:
+        problem.fly_on(problem.fine)
     return best

@@ -313,7 +313,7 @@ class GoalSolver:
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
         (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
         for twist unknowns, the starts across the fold beside the nearest solution
-        (:meth:`_across_the_fold`).
+        (:func:`~rigid_sim.core.goal_fold.nearer`).
         """
         first = problem.first_iterate()
         found = []
@@ -360,19 +360,8 @@ class GoalSolver:
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
         if not problem.wrench:
-            best = self._across_the_fold(problem, best)
+            best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         return best
-
-    def _across_the_fold(self, problem, best):
-        """Return ``best`` or the nearer solution across its fold.
-
-        :func:`~rigid_sim.core.goal_fold.nearer`, its starts solved as a branch's are
-        (coarse to fine, BRANCH_ITERATIONS, abandoned beyond BRANCH_SLACK of the nearest).
-        """
-        def solve(start, reach):
-            return self._converged(problem, [(start, None)],
-                                   lambda u: problem.distance(u) <= reach, BRANCH_ITERATIONS)
-        return goal_fold.nearer(problem, best, solve, BRANCH_SLACK)
 
     def _restarted(self, problem, first):
         """Newton from the other starts, after the first solves found nothing.
