@@ -6,17 +6,17 @@ Two solutions of an asymmetric tumbling body may be born together at a fold of t
 from the twist now to the pose at the goal's time. Of the 12 bench targets at T = 2 s
 (`tumbling`, `gravity`) whose known change was nearer than the solution taken, 11 were
 such a pair: the Jacobian's determinant has opposite signs at the two, its least singular
-value at the solution taken was 0.007-0.21 (the largest ~2), the known twist lay along
-its right singular vector (cosine 0.83-1.0) 0.03-2 rad/s away, and it was 1.0002-1.03
-times nearer. No whole turn links them (the end orientation turns 0.01-0.9 rad on the
+value at the solution taken was 0.007-0.21 rad per rad/s (the largest ~2), the known
+twist lay along its right singular vector (|cosine| 0.83-1.0, once 0.55) 0.03-2.2 rad/s
+away, and the solution taken was 1.0002-1.03 times as far. No whole turn links them (the end orientation turns 0.01-0.9 rad on the
 straight way between), so the branch walk does not reach it.
 
 Near the fold the equations along that direction ``v`` (``w`` the left singular vector)
 reduce to a quadratic, ``w . F(u + t v) ~ sigma t + c t^2 / 2``, whose other root
 ``t = -2 sigma / c`` is the solution across. ``sigma`` and ``c`` come from central
-differences of two flights at ``u +- STEP v``. Newton starts there and halfway (where the
-fold is farther the quadratic overshoots: on those targets the start at ``t`` converged to
-a farther solution, the one halfway to the known).
+differences of two flights at ``u +- STEP v``. Newton starts there, then halfway: where
+the fold is farther the quadratic overshoots (on the 12, the root reached the known on 7,
+halfway on one more, where the root's start converged to a farther solution).
 """
 import numpy as np
 
@@ -24,12 +24,12 @@ from rigid_sim.core.goal_newton import Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
 
 # m or rad of displacement at the goal's time: the differences' step along v (0.1 rad/s
-# at T = 2 s; at 0.5 and 1 rad/s the quadratic fits worse: 6 and 3 of the 12, against 7).
+# at T = 2 s; at 0.5 and 1 rad/s the quadratic fits worse: 6 and 2 of the 12, against 7).
 STEP = 0.2
 FRACTIONS = (1.0, 0.5)   # of the quadratic's root, the starts tried in this order
 DIFFERENCES = 2   # flights: the two at u +- STEP v
-# Relative: a coarse solution farther than the nearest by more is not polished (the coarse
-# flight's own error moves a solution's distance by less, ~1e-3 of it).
+# Relative: a coarse solution farther than the nearest by more is not polished on the fine
+# flight, whose error differs from the coarse one's (a margin chosen, not tuned).
 COARSE_MARGIN = 0.02
 NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 
@@ -37,7 +37,7 @@ NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 def _across(problem, newton):
     """Return the starts across the fold nearest ``newton``'s solution, or []."""
     values, scale = newton.values, problem.scale
-    left, singular, right = np.linalg.svd(newton.jacobian / scale)
+    left, _, right = np.linalg.svd(newton.jacobian / scale)
     direction, normal = right[-1] / scale, left[:, -1]
     ahead, behind = (normal @ problem.residuals((values + sign * STEP * direction)[None])[0]
                      for sign in (1.0, -1.0))
