@@ -381,7 +381,7 @@ def test_of_two_near_tie_solutions_the_one_no_farther_than_the_known_is_taken(ca
     assert change_size(solved - base) <= change_size(twist - base) * (1.0 + 1e-6)
 
 
-# Twists of the (1, 2, 3) rad/s box (the bench's `tumbling` targets) whose torque-free
+# Twists of the (1, 2, 3) rad/s box (drawn as the bench's `tumbling` ones) whose torque-free
 # goals 2 s on have a second solution beside a fold, 1.004 ('a') and 1.019 ('b') times as
 # far as the known one: the Jacobian's determinant has the other sign there, no whole
 # turn links the two, and the solves before the starts across the fold took it.

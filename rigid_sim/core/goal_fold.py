@@ -3,13 +3,14 @@
 """The solution across a fold from a twist goal's solution: the near tie no turn links.
 
 Two solutions of an asymmetric tumbling body may be born together at a fold of the map
-from the twist now to the pose at the goal's time. Of the 12 bench targets at T = 2 s
-(`tumbling`, `gravity`) whose known change was nearer than the solution taken, 11 were
-such a pair: the Jacobian's determinant has opposite signs at the two, its least singular
-value at the solution taken was 0.007-0.21 rad per rad/s (the largest ~2), the known
-twist lay along its right singular vector (|cosine| 0.83-1.0, once 0.55) 0.03-2.2 rad/s
-away, and the solution taken was 1.0002-1.03 times as far. No whole turn links them (the end orientation turns 0.01-0.9 rad on the
-straight way between), so the branch walk does not reach it.
+from the twist now to the pose at the goal's time. Of 12 targets at T = 2 s drawn as the
+bench draws them (`tumbling`, `gravity`, 100 each) whose known change was nearer than the
+solution taken, 11 were such a pair: the Jacobian's determinant has opposite signs at the
+two, its least singular value at the solution taken was 0.007-0.21 rad per rad/s (the
+largest ~2), the known twist lay along its right singular vector (|cosine| 0.83-1.0, once
+0.55) 0.03-2.2 rad/s away, and the solution taken was 1.0002-1.03 times as far. No whole
+turn links them (the end orientation turns 0.01-0.9 rad on the straight way between), so
+the branch walk does not reach it.
 
 Near the fold the equations along that direction ``v`` (``w`` the left singular vector)
 reduce to a quadratic, ``w . F(u + t v) ~ sigma t + c t^2 / 2``, whose other root
