@@ -12,7 +12,7 @@ solutions it finds (by continuation from the current motion, from the current mo
 corrected by the least move that closes its gap, on the branches a whole turn away and,
 where a flight is one exact step, by deflation of those found,
 :mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
-the end orientation, :mod:`~rigid_sim.core.goal_lattice`; for a twist, across the fold
+the end orientation, :mod:`~rigid_sim.core.goal_lattice`; for the others, across the fold
 beside the solution, :mod:`~rigid_sim.core.goal_fold`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
@@ -312,8 +312,8 @@ class GoalSolver:
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
         (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
-        for twist unknowns, the starts across the fold beside the nearest solution
-        (:func:`~rigid_sim.core.goal_fold.nearer`).
+        for twist, linear or angular unknowns, the starts across the fold beside the nearest
+        solution (:func:`~rigid_sim.core.goal_fold.nearer`).
         """
         first = problem.first_iterate()
         found = []
