@@ -29,6 +29,11 @@ from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
 STEP = 0.2
 FRACTIONS = (1.0, 0.5)   # of the quadratic's root, the starts tried in this order
 DIFFERENCES = 2   # flights: the two at u +- STEP v
+TRACE_STEP = 0.4
+TRACE_STEPS = 24
+CORRECTIONS = 3
+CORRECTED = 1e-6
+TRACE_SLACK = 1.5
 # Relative: a coarse solution farther than the nearest by more is not polished on the fine
 # flight, whose error differs from the coarse one's (a margin chosen, not tuned).
 COARSE_MARGIN = 0.02
@@ -36,7 +41,7 @@ NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 
 
 def _across(problem, newton):
-    """Return the starts across the fold nearest ``newton``'s solution, or []."""
+    """Return the quadratic's root (m or rad along v) and the starts across, or (None, [])."""
     values, scale = newton.values, problem.scale
     left, _, right = np.linalg.svd(newton.jacobian / scale)
     direction, normal = right[-1] / scale, left[:, -1]
@@ -44,9 +49,54 @@ def _across(problem, newton):
                      for sign in (1.0, -1.0))
     curvature = (ahead + behind) / STEP ** 2
     if not (np.isfinite(curvature) and curvature != 0.0):
-        return []
+        return None, []
     root = -(ahead - behind) / STEP / curvature
-    return [values + fraction * root * direction for fraction in FRACTIONS]
+    return root, [values + fraction * root * direction for fraction in FRACTIONS]
+
+
+def _traced(problem, best, root, reach):
+    """Return a start where the curve across the fold from ``best`` meets the goal, or None.
+
+    The goal's equations less the least sensitive one (the left singular vector ``w``
+    taken out) leave a curve through ``best``'s solution and the one across the fold.
+    It is followed from ``best`` to the side of ``root`` in steps of TRACE_STEP (a
+    predictor along its tangent, CORRECTIONS Newton corrections on the plane across it),
+    until ``w . F`` changes sign: the start is interpolated there. None where the curve
+    leaves ``reach`` by the metric, a flight fails or TRACE_STEPS are taken.
+    """
+    if problem.coarse is not None:
+        problem.fly_on(problem.coarse)
+    scale, newton = problem.scale, Newton(problem, best.values)
+    point = best.values * scale   # the unknowns in m or rad of displacement
+    residual, jacobian = newton.differences(best.values)
+    left, _, right = np.linalg.svd(jacobian / scale)
+    kept, normal = left[:, :-1], left[:, -1]
+    tangent = np.sign(root) * right[-1]
+    side = None
+    for _ in range(TRACE_STEPS):
+        predicted = point + TRACE_STEP * tangent
+        corrected = predicted
+        for _ in range(CORRECTIONS + 1):
+            residual, jacobian = newton.differences(corrected / scale)
+            if not np.isfinite(residual).all():
+                return None
+            kept_residual = kept.T @ residual
+            if np.linalg.norm(kept_residual) <= CORRECTED:
+                break
+            system = np.vstack((kept.T @ jacobian / scale, tangent))
+            corrected = corrected - np.linalg.solve(
+                system, np.append(kept_residual, tangent @ (corrected - predicted)))
+        if problem.distance(corrected / scale) > reach:
+            return None
+        height = normal @ residual
+        if side is not None and np.sign(height) != side:
+            share = last / (last - height)
+            return (point + share * (corrected - point)) / scale
+        side, last = side or np.sign(height), height
+        following = np.linalg.svd(kept.T @ jacobian / scale)[2][-1]
+        tangent = following if following @ tangent > 0.0 else -following
+        point = corrected
+    return None
 
 
 def _solved(problem, start, reach, nearest, iterations):
@@ -82,8 +132,11 @@ def nearer(problem, best, slack, iterations):
     nearest = problem.distance(best.values)
     reach = slack * nearest
     try:
-        for start in _across(problem, best):
-            if problem.distance(start) > reach:
+        root, starts = _across(problem, best)
+        for start in starts + [None]:
+            if start is None and root is not None:   # the quadratic's starts failed
+                start = _traced(problem, best, root, TRACE_SLACK * nearest)
+            if start is None or problem.distance(start) > reach:
                 continue
             try:
                 newton = _solved(problem, start, reach, nearest, iterations)
