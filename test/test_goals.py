@@ -382,12 +382,15 @@ def test_of_two_near_tie_solutions_the_one_no_farther_than_the_known_is_taken(ca
 
 
 # Twists of the (1, 2, 3) rad/s box (drawn as the bench's `tumbling` ones) whose torque-free
-# goals 2 s on have a second solution beside a fold, 1.004 ('a') and 1.019 ('b') times as
-# far as the known one: the Jacobian's determinant has the other sign there, no whole
-# turn links the two, and the solves before the starts across the fold took it.
+# goals 2 s on have a second solution beside a fold, 1.004, 1.019, 1.032 and 1.008 times
+# as far as the known one: the Jacobian's determinant has the other sign there, no whole
+# turn links the two, and the solves before the starts across the fold took it. 'c' and
+# 'd' lie farther from the fold than its quadratic sees: the curve across is followed.
 ACROSS_FOLDS = {
     'a': [0.343689, 0.573903, -0.400977, -0.144025, 2.057373, 2.694162],
     'b': [-0.547149, 0.455036, 0.215193, -0.555711, 1.539508, 2.445982],
+    'c': [0.521149, 0.488427, -0.682912, 0.063674, 1.974372, 2.053844],
+    'd': [0.559292, -0.061855, 0.360792, 0.172664, 1.868602, 3.125828],
 }
 
 

@@ -83,11 +83,10 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
 # winds several turns, the targets' spread spans neighbouring branches, and the corrected
 # start may sit by a fold of the branch next to the target's (tumbling, T = 10 s).
 TURN_STARTS = 6
-# Flights of the starts across a twist solution's fold (:mod:`~rigid_sim.core.goal_fold`):
-# its two differences, then each start's, one for its first Jacobian and one an iteration,
-# twice over where a coarse flight comes first.
-FOLD_FLIGHTS = (goal_fold.DIFFERENCES
-                + 2 * len(goal_fold.FRACTIONS) * (BRANCH_ITERATIONS + 1))
+# Flights across a twist solution's fold (:mod:`~rigid_sim.core.goal_fold`): its
+# differences and the curve it follows, then each start's, one for its first Jacobian
+# and one an iteration, twice over where a coarse flight comes first.
+FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
