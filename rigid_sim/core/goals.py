@@ -12,7 +12,8 @@ solutions it finds (by continuation from the current motion, from the current mo
 corrected by the least move that closes its gap, on the branches a whole turn away and,
 where a flight is one exact step, by deflation of those found,
 :mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
-the end orientation, :mod:`~rigid_sim.core.goal_lattice`) it
+the end orientation, :mod:`~rigid_sim.core.goal_lattice`; for the others, across the fold
+beside the solution, :mod:`~rigid_sim.core.goal_fold`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -31,7 +32,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_lattice
+from rigid_sim.core import goal_fold, goal_lattice
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
@@ -82,15 +83,20 @@ CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
 # winds several turns, the targets' spread spans neighbouring branches, and the corrected
 # start may sit by a fold of the branch next to the target's (tumbling, T = 10 s).
 TURN_STARTS = 6
+# Flights across a twist solution's fold (:mod:`~rigid_sim.core.goal_fold`): its
+# differences and the curve it follows, then each start's, one for its first Jacobian
+# and one an iteration, twice over where a coarse flight comes first.
+FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
-# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound).
-# The node decides by it whether a goal is solved in the tick.
+# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound)
+# or a twist's starts across its fold, never both. The node decides by it whether a goal
+# is solved in the tick.
 WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 3)
                       + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
                                              + DEFLATED_STARTS + TURN_STARTS))
-                 + goal_lattice.WORST_FLIGHTS)
+                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS))
 
 
 @dataclass(frozen=True)
@@ -304,7 +310,9 @@ class GoalSolver:
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
-        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`).
+        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
+        for twist, linear or angular unknowns, the starts across the fold beside the nearest
+        solution (:func:`~rigid_sim.core.goal_fold.nearer`).
         """
         first = problem.first_iterate()
         found = []
@@ -350,6 +358,8 @@ class GoalSolver:
             best = self._deflated(problem, best, (problem.current, first))
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
+        if not problem.wrench:
+            best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         return best
 
     def _restarted(self, problem, first):
