@@ -76,8 +76,8 @@ def test_a_ten_second_spring_goal_refused_without_the_meetings_is_reached():
     """T = 10 s on the damped spring: a target the oracle flew to, reached by the World.
 
     Made by the oracle's flight of a change of (-0.26, -0.23, 0.25) m/s and
-    (0.44, 0.1, -0.31) rad/s; none of the other starts converge (the solver refused it
-    before the two-sided meetings, 17 starts, 1570 flights), a meeting's does.
+    (0.44, 0.1, -0.31) rad/s; none of the other starts converge (main refused it: 17
+    starts, 1915 flights), a meeting's does.
     """
     effects, until = {'springs': [SPRING]}, 10.0
     twist = np.array([-0.16, -0.23, 0.25, 1.44, 2.1, 2.69])
