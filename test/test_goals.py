@@ -18,6 +18,7 @@ from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.goal_flight import Rollout
 from rigid_sim.core.goal_newton import Newton
 from rigid_sim.core.goal_problem import GoalProblem
+from rigid_sim.core.goal_twosided import TwoSided
 from rigid_sim.core.goals import (ACCEPTED, Goal, GoalRefused, GoalSolver, MAX_SPEED, MAX_SPIN,
                                   WORST_FLIGHTS)
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
@@ -598,16 +599,19 @@ def test_a_ten_second_spring_goal_it_cannot_solve_is_refused_within_the_work_bou
     Over 10 s this spring's flight is chaotic (docs/goals.md: the end pose's sensitivity to
     the twist grows as exp(0.39 t)), and Newton converges only from starts within about
     0.01-0.1 rad/s of a solution. This target, made by the oracle's flight of a change of
-    (-0.26, -0.23, 0.25) m/s and (0.44, 0.1, -0.31) rad/s, is one no start reaches: the
-    refusal must say so, name the work bound, and stay within it (the flights of all
-    copies, counted as the rollouts fly them), leaving the world as it was.
+    (1.13, -0.29, 0.56) m/s and (0.23, -0.08, -0.33) rad/s, is one no start reaches, nor
+    any two-sided meeting: the refusal must say so, name the work bound, and stay within it
+    (the flights of all copies, counted as the rollouts and the meetings fly them), leaving
+    the world as it was.
     """
     effects, until, step = {'springs': [SPRING]}, 10.0, 1e-2
-    twist = np.array([-0.16, -0.23, 0.25, 1.44, 2.1, 2.69])
+    twist = np.array([1.23, -0.29, 0.56, 1.23, 1.92, 2.67])
     goal = Goal(0, *oracle_pose(effects, twist[:3], twist[3:], until), until)
     flights = []
-    fly = Rollout.fly
+    fly, meet = Rollout.fly, TwoSided.residuals
     monkeypatch.setattr(Rollout, 'fly', lambda *a, **k: flights.append(1) or fly(*a, **k))
+    monkeypatch.setattr(TwoSided, 'residuals',
+                        lambda *a, **k: flights.append(1) or meet(*a, **k))
     reason = refusal(scene_world(effects), goal, step)
     assert reason.startswith('no convergence from any of its 17 starts within the work '
                              f'bound (at most {WORST_FLIGHTS} flights')

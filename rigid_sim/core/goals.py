@@ -32,7 +32,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_fold, goal_lattice
+from rigid_sim.core import goal_fold, goal_lattice, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
@@ -93,9 +93,14 @@ FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1
 # deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound)
 # or a twist's starts across its fold, never both. The node decides by it whether a goal
 # is solved in the tick.
-WORST_FLIGHTS = (2 * (MAX_ITERATIONS * (RESTARTS + 3)
+# The seeded draws where the two-sided meetings (:mod:`~rigid_sim.core.goal_twosided`) come
+# first: as many fewer as leave the meetings' flights within those of the draws left out.
+MET_RESTARTS = RESTARTS - int(np.ceil(goal_twosided.WORST_FLIGHTS / (2 * MAX_ITERATIONS)))
+WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                       + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
                                              + DEFLATED_STARTS + TURN_STARTS))
+                 + max(2 * MAX_ITERATIONS * RESTARTS,
+                       2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
                  + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS))
 
 
@@ -368,19 +373,27 @@ class GoalSolver:
         The current motion as it is, then the starts a whole turn from ``first``
         (:func:`_turned`, BRANCH_ITERATIONS each), then seeded draws around it: a start
         that ends in a local minimum of the residual is followed by the next, which may
-        lie in another basin.
+        lie in another basin. On a long flight a spring or damper makes chaotic, the
+        two-sided meetings (:func:`~rigid_sim.core.goal_twosided.meetings`) come before
+        MET_RESTARTS of the draws.
         """
-        tries = [([problem.current], MAX_ITERATIONS),
-                 (_turned(problem, first), BRANCH_ITERATIONS),
-                 (_draws(problem, first), MAX_ITERATIONS)]
+        tries = [([(problem.current, None)], MAX_ITERATIONS),
+                 ([(s, None) for s in _turned(problem, first)], BRANCH_ITERATIONS),
+                 ([(s, None) for s in _draws(problem, first)], MAX_ITERATIONS)]
+        if goal_twosided.applies(problem):   # a chaotic flight: fewer draws, after these
+            tries[2:] = [(goal_twosided.meetings(problem, first),
+                          goal_twosided.FINISH_ITERATIONS),
+                         (tries[2][0][:MET_RESTARTS], MAX_ITERATIONS)]
         tried = 1 + (problem.goal.unknowns in CONTINUED)
         for starts, iterations in tries:
-            if not starts:   # linear unknowns have no whole turns
+            if not isinstance(starts, list):   # the meetings, found one by one
+                tried += goal_twosided.MEET_STARTS
+            elif not starts:   # linear unknowns have no whole turns
                 continue
-            tried += len(starts)
+            else:
+                tried += len(starts)
             try:
-                return self._converged(problem, [(s, None) for s in starts],
-                                       iterations=iterations)
+                return self._converged(problem, starts, iterations=iterations)
             except NoConvergence as error:
                 last = error
         raise NoConvergence(_unconverged(tried, last)) from None
@@ -441,13 +454,14 @@ class GoalSolver:
 
     @staticmethod
     def _converged(problem, starts, bound=None, iterations=MAX_ITERATIONS):
-        """Newton from the first of ``starts`` [(values, Jacobian or None)] that converges.
+        """Newton from the first of ``starts`` (values, Jacobian or None) that converges.
 
         A local minimum of the residual holds the iterations of one start; the next may lie
         in another basin. The last failure is the refusal's reason. ``bound`` and
         ``iterations``: as ``Newton.converge`` takes them.
         """
-        for number, (values, known) in enumerate(starts):
+        last = NoConvergence('no start to converge from')
+        for values, known in starts:
             newton = Newton(problem, values, known)
             try:
                 if problem.coarse is not None and known is None:
@@ -457,8 +471,8 @@ class GoalSolver:
                     newton.converge(TOLERANCE, bound, iterations)
                 return newton
             except NoConvergence as error:
-                if number + 1 == len(starts):
-                    raise NoConvergence(_with_condition(error, newton)) from None
+                last = NoConvergence(_with_condition(error, newton))
+        raise last
 
     def rollout(self, body, unknowns, axes, copies):
         """Return the :class:`Rollout` of ``copies`` copies of ``body``, one per integrator."""
