@@ -222,6 +222,13 @@ class GoalInput:
             return   # another scene, a reset, or superseded (reported then)
         del self._latest[goal.body]
         if isinstance(outcome, Exception):
+            if chases:   # the worker's solution did not hold from the world as it moved on
+                outcome = ValueError(
+                    f'solved in the worker thread, but not again from the world as it moved '
+                    f'on meanwhile, starting from that solution ({chases} of at most '
+                    f'{CHASES} tries; a flight that stretches small changes, a spring off '
+                    f'the centre of mass, loses its solutions so: a nearer goal time or '
+                    f'rate 0 keeps them): {outcome}')
             self._report_refusal(goal.body, outcome)
             return
         work = self._flight_work(goal, settings)

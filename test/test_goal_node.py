@@ -155,6 +155,36 @@ def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim
     reached_through_the_worker(rigid_sim(yaml=SCENE, time_step=DT))
 
 
+def test_a_goal_whose_worker_solution_fails_from_the_world_later_says_so(rigid_sim,
+                                                                          monkeypatch):
+    """The worker solves; from the world as it moved on, the solution's start fails.
+
+    A chaotic flight (a spring off the centre of mass, 10 s ahead) does that; here a solve
+    from a given start is made to fail. The refusal names both steps, not only the last.
+    """
+    monkeypatch.setattr(goal_input, 'WORST_FLIGHTS', 10 ** 9)
+    solve = goal_input.GoalSolver.solve
+
+    def fails_from_a_start(self, goal, path=False, start=None, jacobian=None):
+        if start is not None:
+            raise GoalRefused('no convergence from this start (stand-in)')
+        return solve(self, goal, path)
+    monkeypatch.setattr(goal_input.GoalSolver, 'solve', fails_from_a_start)
+    sim = rigid_sim(yaml=SCENE, time_step=DT)
+    sim.node.loop.stopped = False   # as if a wall clock ticked it: solves go to the thread
+    user = User(sim)
+    user.goal(at=2.0)
+    while sim.node.goals.refused == 0:
+        assert sim.time < 1.0, 'the worker thread did not answer'
+        time.sleep(0.005)
+        sim.step(1)
+    sim.step(1)
+    refused = user.statuses[-1]
+    assert refused.level == DiagnosticStatus.WARN and sim.node.goals.solved == 0
+    assert 'solved in the worker thread, but not again from the world' in refused.message
+    assert refused.message.endswith('no convergence from this start (stand-in)')
+
+
 FREE_SCENE = """
 bodies:
   - {name: box, shape: {type: box, size: [0.2, 0.3, 0.4]}, mass: 2.0,
