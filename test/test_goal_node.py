@@ -155,8 +155,7 @@ def test_a_goal_solved_in_the_worker_thread_is_re_anchored_and_reached(rigid_sim
     reached_through_the_worker(rigid_sim(yaml=SCENE, time_step=DT))
 
 
-def test_a_goal_whose_worker_solution_fails_from_the_world_later_says_so(rigid_sim,
-                                                                          monkeypatch):
+def test_a_worker_solution_failing_from_the_world_later_says_so(rigid_sim, monkeypatch):
     """The worker solves; from the world as it moved on, the solution's start fails.
 
     A chaotic flight (a spring off the centre of mass, 10 s ahead) does that; here a solve
