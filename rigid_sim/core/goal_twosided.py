@@ -18,11 +18,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rigid_sim.core.effects.damping import DampingParameters
-from rigid_sim.core.effects.springs import AnchoredSpringParameters, SpringParameters
+from rigid_sim.core.effects.springs import (DAMPING_COLUMN, AnchoredSpringParameters,
+                                            SpringParameters)
 from rigid_sim.core.goal_copies import Copies
 from rigid_sim.core.goal_newton import Newton, NoConvergence
 
-DAMPING_COLUMN = 7   # of AnchoredSpringParameters.rows: lever 3, anchor 3, stiffness, damping
 # Flights this long (steps) or longer get the two-sided starts: at T = 10 s, dt 1e-2, the
 # damped spring stretches the end pose by ~e^4 and Newton's basin is 0.01-0.1 of the twist.
 MIN_STEPS = 1000

@@ -46,8 +46,12 @@ class AnchoredSpringParameters(NamedTuple):
 
     first: np.ndarray   # (N + 1,) int: body i's springs are rows first[i] to first[i + 1] - 1
     # (S, 9): lever (m, body axes, from the centre of mass), anchor (m, world), stiffness
-    # N/m, damping N s/m, rest length m; each body's springs in the scene's order.
+    # N/m, damping N s/m (column DAMPING_COLUMN), rest length m; each body's springs in the
+    # scene's order.
     rows: np.ndarray
+
+
+DAMPING_COLUMN = 7   # of AnchoredSpringParameters.rows (read by goal_twosided's reversal)
 
 
 class Springs(Effect):
