@@ -125,6 +125,10 @@ class EntityServices:
 
         self._builds = SlicedBuilds(node)
 
+    def close(self):
+        """End the thread that sends big answers (the node is gone)."""
+        self._builds.close()
+
     def _index(self, name):
         """Scene index of entity ``name``, or None."""
         names = self._node.world.bodies.names
@@ -326,6 +330,10 @@ class SlicedBuilds:
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._timer = node.create_timer(0.0, self._on_timer, clock=steady)
         self._timer.cancel()
+
+    def close(self):
+        """End the sending thread once the answers in hand are sent (the node is gone)."""
+        self._sender.shutdown(wait=False, cancel_futures=True)
 
     @property
     def idle(self):

@@ -139,6 +139,12 @@ class GoalInput:
         if self._jobs is not None:
             self._jobs.clear()
 
+    def close(self):
+        """End the worker thread, if any, once its solve in hand is done (the node is gone)."""
+        if self._jobs is not None:
+            self._jobs.close()
+            self._jobs = None
+
     def solve_now(self, goal, settings):
         """Solve ``goal`` in this thread and apply it; the GoalSolution (GoalRefused raised)."""
         solution = self._solver_for(settings).solve(goal, path=True)
@@ -308,6 +314,7 @@ class Jobs:
     def __init__(self):
         self._waiting = OrderedDict()   # body index -> job
         self._ready = threading.Condition()
+        self._closed = False
 
     def put(self, index, job):
         """Queue ``job`` for body ``index``, which has none waiting."""
@@ -325,18 +332,25 @@ class Jobs:
         with self._ready:
             self._waiting.clear()
 
-    def get(self):
-        """Return the oldest waiting job, waiting for one if there is none."""
+    def close(self):
+        """Withdraw every waiting job and end the worker once its solve in hand is done."""
         with self._ready:
-            while not self._waiting:
+            self._waiting.clear()
+            self._closed = True
+            self._ready.notify()
+
+    def get(self):
+        """Return the oldest waiting job, waiting for one if there is none; None once closed."""
+        with self._ready:
+            while not (self._waiting or self._closed):
                 self._ready.wait()
-            return self._waiting.popitem(last=False)[1]
+            return None if self._closed else self._waiting.popitem(last=False)[1]
 
 
 def _work(jobs, results):
-    """Solve goals from world snapshots, one after another, for ever (a daemon thread)."""
-    while True:
-        number, goal, copied, step, world, start, chases = jobs.get()
+    """Solve goals from world snapshots, one after another, until ``jobs`` is closed."""
+    while (job := jobs.get()) is not None:
+        number, goal, copied, step, world, start, chases = job
         try:
             values, jacobian = start if start is not None else (None, None)
             outcome = GoalSolver(copied, step).solve(goal, start=values, jacobian=jacobian)

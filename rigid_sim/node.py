@@ -169,10 +169,16 @@ class RigidSimNode(Node):
         """Destroy the node and its action server, which rclpy's ``destroy_node`` leaves.
 
         A live action server keeps the node, and with it the process's DDS participant, in
-        the middleware after the node is destroyed (docs/ros_notes.md, "Shutdown").
+        the middleware after the node is destroyed (docs/ros_notes.md, "Shutdown"). The
+        threads that solve goals and send big answers end too: an embedding process (a
+        test suite) makes nodes by the hundred.
         """
         for waitable in list(self.waitables):
             waitable.destroy()
+        if getattr(self, 'goals', None) is not None:
+            self.goals.close()
+        if getattr(self, 'sim_interfaces', None) is not None:
+            self.sim_interfaces.entities.close()
         super().destroy_node()
 
     @property

@@ -296,3 +296,36 @@ def test_answers_built_but_not_yet_sent_count_against_the_bound(rigid_sim, monke
     spin_until(sim.executor, lambda: all(call.done() for call in calls),
                what='both held answers sent', timeout=TIMEOUT)
     assert [len(call.result().states) for call in calls] == [1000, 1000]
+
+
+def test_the_goal_and_answer_threads_end_with_their_node(rigid_sim, monkeypatch):
+    """A node destroyed leaves none of its threads behind: a suite makes nodes by the hundred.
+
+    The worker solves a goal (a wall clock sends it there) and a GetEntitiesStates answer
+    built in slices is sent by the answering thread; once the node is closed both end.
+    """
+    from rigid_sim.deferred import SERVICE_QOS
+    from simulation_interfaces.srv import GetEntitiesStates
+    monkeypatch.setattr('rigid_sim.entity_services.SLICE', 1e-6)
+    earlier = set(threading.enumerate())
+    sim = rigid_sim(yaml=MANY, time_step=DT)
+    client = sim.create_node('client').create_client(
+        GetEntitiesStates, sim.topic('get_entities_states'), qos_profile=SERVICE_QOS)
+    spin_until(sim.executor, client.service_is_ready, what='service get_entities_states')
+    call = client.call_async(GetEntitiesStates.Request())
+    spin_until(sim.executor, call.done, what='the answer of 1000 states', timeout=TIMEOUT)
+    assert len(call.result().states) == 1000
+    sim.node.loop.stopped = False   # as if a wall clock ticked it: solves go to the thread
+    User(sim, 's0').goal(at=2.0)
+    names = ('rigid_sim goals', 'entities answer')
+
+    def threads():
+        return [t for t in set(threading.enumerate()) - earlier if t.name.startswith(names)]
+    while sorted(t.name[:15] for t in threads()) != ['entities answer', 'rigid_sim goals']:
+        assert sim.time < 1.0, f'threads: {[t.name for t in threads()]}'
+        sim.step(1)
+    started = threads()
+    sim.close()
+    for thread in started:
+        thread.join(TIMEOUT)
+        assert not thread.is_alive(), thread.name
