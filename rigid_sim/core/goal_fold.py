@@ -27,7 +27,7 @@ followed across the fold until ``w . F`` changes sign, and Newton starts there: 
 import numpy as np
 
 from rigid_sim.core.goal_newton import Newton, NoConvergence
-from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
+from rigid_sim.core.goal_problem import COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE
 
 # m or rad of displacement at the goal's time: the differences' step along v (0.1 rad/s
 # at T = 2 s; at 0.5 and 1 rad/s the quadratic fits worse: 6 and 2 of the 12, against 7).
@@ -52,7 +52,6 @@ STARTS = len(FRACTIONS) + 1   # the quadratic's, and the curve's
 # Relative: a coarse solution farther than the nearest by more is not polished on the fine
 # flight, whose error differs from the coarse one's (a margin chosen, not tuned).
 COARSE_MARGIN = 0.02
-NEARER = 1e-9   # relative: a solution nearer by less is the same distance
 
 
 def _across(problem, newton):
@@ -155,7 +154,8 @@ def nearer(problem, best, slack, iterations):
                 newton = _solved(problem, start, reach, nearest, iterations)
             except NoConvergence:
                 continue
-            if newton is not None and problem.distance(newton.values) < nearest * (1.0 - NEARER):
+            if (newton is not None
+                    and problem.distance(newton.values) < nearest * (1.0 - SAME_DISTANCE)):
                 return newton
     finally:
         problem.fly_on(problem.fine)

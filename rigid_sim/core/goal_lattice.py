@@ -21,7 +21,7 @@ converges nearer.
 import numpy as np
 
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, Newton, NoConvergence
-from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE
+from rigid_sim.core.goal_problem import COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE
 
 TURNS = (1, -1, 2, -2, 3, -3, 4, -4)   # whole turns about the sensitive direction tried
 # rad, of the end orientation along each of the two other directions, both ways: where
@@ -29,7 +29,6 @@ TURNS = (1, -1, 2, -2, 3, -3, 4, -4)   # whole turns about the sensitive directi
 ACROSS = 1.5
 ROUNDS = 4         # walks on from a nearer solution at most
 ITERATIONS = 10    # of Newton from each start, on the coarse flight
-NEARER = 1e-9      # relative: a solution nearer by less is the same distance
 # A start's iterates farther than this times the nearest distance are abandoned: the
 # force is unique and dominates the metric, so a start that heads for a farther solution
 # soon leaves it (wrench_long, 100 targets, at once: 1.02 and 1.002 both 89 nearest, CPU
@@ -86,7 +85,7 @@ def nearer(problem, best):
                  for start in _starts(problem, here)]
         found = [newton for newton in found if newton is not None]
         step = min(found, key=lambda newton: problem.distance(newton.values), default=None)
-        if step is None or problem.distance(step.values) >= nearest * (1.0 - NEARER):
+        if step is None or problem.distance(step.values) >= nearest * (1.0 - SAME_DISTANCE):
             break
         here = walked = step
         nearest = problem.distance(step.values)
@@ -98,7 +97,7 @@ def nearer(problem, best):
         polished.converge(TOLERANCE, iterations=MAX_ITERATIONS)
     except NoConvergence:
         return best
-    if problem.distance(polished.values) < problem.distance(best.values) * (1.0 - NEARER):
+    if problem.distance(polished.values) < problem.distance(best.values) * (1.0 - SAME_DISTANCE):
         polished.iterations += best.iterations
         return polished
     return best

@@ -21,6 +21,9 @@ from rigid_sim.core.goal_flight import (PATH_POSES, Flight, GoalRefused, collide
 UNKNOWNS = {'twist': (6, (True, True)), 'linear': (3, (True, False)),
             'angular': (3, (False, True)), 'wrench': (6, (True, True))}
 TOLERANCE = 1e-10      # m and rad at which the iterations stop
+# Relative: solutions whose distances (:meth:`GoalProblem.distance`) differ by less are as
+# near as each other; a search keeps a solution only if it is nearer by more.
+SAME_DISTANCE = 1e-9
 # m and rad: close enough on the coarse flight, which itself errs by more (see _coarse).
 COARSE_TOLERANCE = 1e-3
 FD_STEP = 1e-7         # of each unknown's displacement scale: the forward differences

@@ -35,7 +35,8 @@ from rigid_sim.core.goal_deflation import Deflated
 from rigid_sim.core import goal_fold, goal_lattice, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
-from rigid_sim.core.goal_problem import COARSE_TOLERANCE, TOLERANCE, UNKNOWNS, GoalProblem
+from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
+                                         GoalProblem)
 
 __all__ = ['ACCEPTED', 'MAX_SPEED', 'MAX_SPIN', 'UNKNOWNS', 'WRENCH_AXES', 'Goal',
            'GoalRefused', 'GoalSolution', 'GoalSolver']
@@ -67,7 +68,6 @@ CONTINUATION_STAGE = 0.25
 CONTINUED = ('twist', 'angular', 'wrench')
 SMALLEST_STAGE = 1.0 / 32.0
 SAME_START = 0.05
-SAME_SOLUTION = 1e-9
 # Deflated solves after the branch walk, where a flight is one exact step (twist and
 # angular unknowns of a free body: a flight costs microseconds, the solve's Python most):
 # from the current motion and from the corrected one, BRANCH_ITERATIONS each. On a flight
@@ -352,7 +352,7 @@ class GoalSolver:
             except NoConvergence:
                 continue
             distance = problem.distance(newton.values)
-            if distance < nearest * (1.0 - SAME_SOLUTION) and not _near_any(
+            if distance < nearest * (1.0 - SAME_DISTANCE) and not _near_any(
                     problem, newton.values, [best.values]):
                 best, nearest = newton, distance
                 candidates += [newton.values + shift
@@ -416,7 +416,7 @@ class GoalSolver:
             except NoConvergence:
                 continue
             roots.append(newton.values)
-            if problem.distance(newton.values) < nearest * (1.0 - SAME_SOLUTION):
+            if problem.distance(newton.values) < nearest * (1.0 - SAME_DISTANCE):
                 # Its Jacobian is the deflated one: the true one comes with a fresh Newton.
                 best, nearest = Newton(problem, newton.values), problem.distance(newton.values)
                 best.converge(TOLERANCE)
