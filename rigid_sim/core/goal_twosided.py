@@ -22,6 +22,7 @@ from rigid_sim.core.effects.springs import (DAMPING_COLUMN, AnchoredSpringParame
                                             SpringParameters)
 from rigid_sim.core.goal_copies import Copies
 from rigid_sim.core.goal_newton import Newton, NoConvergence
+from rigid_sim.core.state import packed_rows
 
 # Flights this long (steps) or longer get the two-sided starts: at T = 10 s, dt 1e-2, the
 # damped spring stretches the end pose by ~e^4 and Newton's basin is 0.01-0.1 of the twist.
@@ -121,10 +122,7 @@ class TwoSided:
         self.mass = bodies.mass[index]
         self.inertia_body = np.array(bodies.inertia_body[index], dtype=float)
         self.com = np.array(bodies.com_in_body[index], dtype=float)
-        position, orientation = problem.goal_pose
-        self.turn = Rotation.from_quat(orientation).as_matrix()
-        self.centre = position + self.turn @ self.com
-        self.orientation = np.array(orientation, dtype=float)
+        self.goal_pose = tuple(np.array(part, dtype=float) for part in problem.goal_pose)
         self.steps = np.concatenate((problem.steps, problem.steps))
         self.scale = np.concatenate((problem.scale, problem.scale))
         self._pairs = {}
@@ -141,13 +139,12 @@ class TwoSided:
 
     def end_rows(self, twists):
         """Return states (K, 13) at the goal pose with twists (K, 6) (origin velocity, spin)."""
-        lever = self.turn @ self.com
-        rows = np.empty((len(twists), 13))
-        rows[:, :3], rows[:, 3:7] = self.centre, self.orientation
-        spin = twists[:, 3:]
-        rows[:, 7:10] = self.mass * (twists[:, :3] + np.cross(spin, lever))
-        rows[:, 10:13] = spin @ (self.turn @ self.inertia_body @ self.turn.T).T
-        return rows
+        count = len(twists)
+        position, orientation = self.goal_pose
+        return packed_rows(self.problem.world.bodies, np.full(count, self.problem.index),
+                           np.broadcast_to(position, (count, 3)),
+                           np.broadcast_to(orientation, (count, 4)), twists[:, :3],
+                           twists[:, 3:])
 
     def twist_of(self, row):
         """Return the twist (6,) (origin velocity, spin) of a state (13,) of the body."""
