@@ -554,8 +554,8 @@ class ExplicitRungeKutta(Integrator):
             self._kernel = CompiledCall(KERNELS[self.body_axes, False, self.estimates])
         elif in_lanes:
             self._work = (0, count)   # the kernel's range of bodies: all of them
-            self._kernel = across_threads(CompiledCall(lanes_kernel(self.estimates)),
-                                          lanes_kernel(self.estimates), count)
+            kernel = lanes_kernel(self.estimates)
+            self._kernel = across_threads(CompiledCall(kernel), kernel, count)
         else:
             self._kernel = across_threads(
                 CompiledCall(KERNELS[self.body_axes, True, self.estimates]),
