@@ -309,13 +309,23 @@ def oracle_wrench(effects):
 
 
 def oracle_pose(effects, linear, angular, until=T, pose=(np.array([0.3, 0.0, 0.5]),
-                                                         np.array([0.0, 0.0, 0.0, 1.0]))):
-    """Return the box's origin (3,) and orientation (4,) at ``until`` after a start twist."""
+                                                         np.array([0.0, 0.0, 0.0, 1.0])),
+                held=None):
+    """Return the box's origin (3,) and orientation (4,) at ``until`` after a start twist.
+
+    ``held`` (6,) or None: a force and a torque about the centre of mass, world axes, held
+    throughout on top of the effects'.
+    """
     position, q = pose
     omega_body = Rotation.from_quat(q).inv().apply(angular)
+    wrench = oracle_wrench(effects)
+
+    def with_held(time, x, v, q, omega_body):
+        force, torque = wrench(time, x, v, q, omega_body)
+        return force + held[:3], torque + Rotation.from_quat(q).inv().apply(held[3:])
     x, _, orientation, _ = oracles.reference_motion(
         2.0, BOX_INERTIA, (position, linear, q, omega_body), [0.0, until],
-        oracle_wrench(effects), rtol=ORACLE_TOLERANCE, atol=ORACLE_TOLERANCE)
+        wrench if held is None else with_held, rtol=ORACLE_TOLERANCE, atol=ORACLE_TOLERANCE)
     return x[-1], orientation[-1]
 
 
@@ -454,17 +464,8 @@ def oracle_held_pose(wrench, until):
     ``wrench`` (6,): a force and a torque about the centre of mass, world axes, held from
     the start, on the box of BOX under gravity.
     """
-    gravity = oracle_wrench({'gravity': {'acceleration': G.tolist()}})
-
-    def held(time, x, v, q, omega_body):
-        force, torque = gravity(time, x, v, q, omega_body)
-        return (force + wrench[:3],
-                torque + Rotation.from_quat(q).inv().apply(wrench[3:]))
-    x, _, orientation, _ = oracles.reference_motion(
-        2.0, BOX_INERTIA, (np.array([0.3, 0.0, 0.5]), np.array([0.1, 0.0, 0.0]),
-                           np.array([0.0, 0.0, 0.0, 1.0]), np.array([1.0, 2.0, 3.0])),
-        [0.0, until], held, rtol=ORACLE_TOLERANCE, atol=ORACLE_TOLERANCE)
-    return x[-1], orientation[-1]
+    return oracle_pose({'gravity': {'acceleration': G.tolist()}}, np.array([0.1, 0.0, 0.0]),
+                       np.array([1.0, 2.0, 3.0]), until, held=np.asarray(wrench))
 
 
 def held_size(wrench, until):
