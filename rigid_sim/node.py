@@ -91,7 +91,7 @@ def warm_up(world, name, logger, integrator=None, imus=None):
 
 
 class TickInProgress:
-    """The steps of one tick still to take, for the world it began on."""
+    """The steps of one tick still to take, for the world it began on, then its publication."""
 
     def __init__(self, world, steps):
         self.world = world
@@ -99,6 +99,7 @@ class TickInProgress:
         self.left = steps
         self.busy = 0.0          # s of wall time the tick has taken so far
         self.slices = 0          # times it returned to the loop before its end
+        self.stepped = False     # its steps are all taken, counted, and /clock and IMUs sent
 
 
 def check_frames(scene, settings):
@@ -230,8 +231,9 @@ class RigidSimNode(Node):
         """Run one tick, or what is left of the one in progress; whether it is done.
 
         ``until`` (a ``time.perf_counter`` deadline; None: no limit) ends the tick's steps
-        early, after at least one: the loop runs the rest in its next executor rounds, with
-        control answered between them (docs/design.md, "Control apart from the work").
+        early, after at least one, and its publication to many per-body topics: the loop
+        runs the rest in its next executor rounds, with control answered between them
+        (docs/design.md, "Control apart from the work").
         ``advance`` is read when a tick starts only.
         """
         started = time.perf_counter()
@@ -243,13 +245,17 @@ class RigidSimNode(Node):
         ticking.busy += time.perf_counter() - started
         if not self._advance(ticking, until):
             return False
+        if not ticking.stepped:
+            ticking.stepped = True
+            self.health.stats.add(ticking.busy)
+            if self.settings.publish_clock:
+                self.clock.publish(self.world.time)
+            self.imu_outputs.publish(self.world)
+        if self.ticks % self.settings.publish_every == 0 and not self.outputs.publish(
+                self.world, until):
+            ticking.slices += 1
+            return False
         self._ticking = None
-        self.health.stats.add(ticking.busy)
-        if self.settings.publish_clock:
-            self.clock.publish(self.world.time)
-        self.imu_outputs.publish(self.world)
-        if self.ticks % self.settings.publish_every == 0:
-            self.outputs.publish(self.world)
         self.ticks += 1
         return True
 

@@ -34,21 +34,36 @@ bodies:
 
 
 def test_body_transforms_carry_the_published_poses_under_prefixed_frames():
+    from rclpy.serialization import deserialize_message
+    from rigid_sim.tf_output import TFMessage, serialized_transforms
     scene = parse_scene(yaml.safe_load(SCENE))
     world = build_world(scene, 'rk4')
     messages = conversions.StateMessages(scene.bodies, 'world', 'sim1/')
-    messages.fill(world.snapshot(), range(2), range(2))
-    messages.fill_transforms()
-    assert [t.child_frame_id for t in messages.transforms] == ['sim1/box', 'sim1/ball']
+    snapshot = world.snapshot()
+    messages.fill(snapshot, range(2), range(2))
+    tf = serialized_transforms(messages.transforms, messages.stamp)
+    tf.write(snapshot.frames, messages.stamp)
+    sent = deserialize_message(_published(tf), TFMessage).transforms
+    assert [t.child_frame_id for t in sent] == ['sim1/box', 'sim1/ball']
     assert [m.child_frame_id for m in messages.odometry] == ['sim1/box', 'sim1/ball']
-    for transform, pose in zip(messages.transforms, messages.poses):
+    for transform, pose in zip(sent, messages.poses):
         assert transform.header.frame_id == 'world'
         assert transform.header.stamp == pose.header.stamp
         t, r = transform.transform.translation, transform.transform.rotation
         p, q = pose.pose.position, pose.pose.orientation
         assert (t.x, t.y, t.z, r.x, r.y, r.z, r.w) == (p.x, p.y, p.z, q.x, q.y, q.z, q.w)
-    np.testing.assert_allclose([messages.transforms[0].transform.translation.x,
-                                messages.transforms[0].transform.translation.y], [1.0, 2.0])
+    np.testing.assert_allclose([sent[0].transform.translation.x,
+                                sent[0].transform.translation.y], [1.0, 2.0])
+
+
+def _published(serialized):
+    """Return the bytes ``serialized`` hands its publisher."""
+    class Publisher:
+        def publish(self, data):
+            self.data = data
+    publisher = Publisher()
+    serialized.publish(publisher)
+    return publisher.data
 
 
 def test_static_transforms_place_every_point_and_imu_frame_on_its_body():
