@@ -70,7 +70,7 @@ print(len(future.result().states) if future.done() else 'no answer', flush=True)
 # A client process that subscribes to every topic of the boxes_N scene's N bodies (pose,
 # twist and odometry each) and to ~/poses, ~/markers and /tf, says "heard" once the last
 # body's pose has come, and takes what comes until it is killed.
-HEARER = f"""
+HEARER = """
 import os, sys, rclpy
 from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
@@ -81,14 +81,14 @@ bodies = int(sys.argv[1])
 rclpy.init(domain_id=int(os.environ['ROS_DOMAIN_ID']))
 node = rclpy.create_node('hearer')
 heard = []
-subscriptions = [node.create_subscription(kind, f'/rigid_sim/box{{i}}/{{topic}}', heard.append, 1)
-                 for i in range(bodies) for kind, topic in
+subscriptions = [node.create_subscription(kind, f'/rigid_sim/box{i}/{topic}', heard.append,
+                                          1) for i in range(bodies) for kind, topic in
                  ((PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom'))]
-for kind, topic, qos in ((PoseArray, '/rigid_sim/poses', 1), (MarkerArray, '/rigid_sim/markers', 1),
-                         (TFMessage, '/tf', TF_QOS)):
+for kind, topic, qos in ((PoseArray, '/rigid_sim/poses', 1),
+                         (MarkerArray, '/rigid_sim/markers', 1), (TFMessage, '/tf', TF_QOS)):
     subscriptions.append(node.create_subscription(kind, topic, heard.append, qos))
 last = []
-node.create_subscription(PoseStamped, f'/rigid_sim/box{{bodies - 1}}/pose', last.append, 1)
+node.create_subscription(PoseStamped, f'/rigid_sim/box{bodies - 1}/pose', last.append, 1)
 while not last:
     rclpy.spin_once(node, timeout_sec=0.1)
 print('heard', flush=True)
