@@ -32,7 +32,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_fold, goal_lattice, goal_twosided
+from rigid_sim.core import goal_ball, goal_fold, goal_lattice, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
@@ -87,12 +87,18 @@ TURN_STARTS = 6
 # differences and the curve it follows, then each start's, one for its first Jacobian
 # and one an iteration, twice over where a coarse flight comes first.
 FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1)
+# Flights of the search of the ball the nearest solution lies in
+# (:mod:`~rigid_sim.core.goal_ball`, a flight of one exact step only, after the fold's
+# starts): its grid and batched Newton in flights of goal_ball.CHUNK rows, then its
+# polishing starts, one flight of the goal's copies for the first Jacobian and one an
+# iteration.
+BALL_FLIGHTS = goal_ball.GRID_FLIGHTS + goal_ball.POLISHED * (BRANCH_ITERATIONS + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
 # deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound)
-# or a twist's starts across its fold, never both. The node decides by it whether a goal
-# is solved in the tick.
+# or a twist's starts across its fold and the search of the ball, never both. The node
+# decides by it whether a goal is solved in the tick.
 # The seeded draws where the two-sided meetings (:mod:`~rigid_sim.core.goal_twosided`) come
 # first: as many fewer as leave the meetings' flights within those of the draws left out.
 MET_RESTARTS = RESTARTS - int(np.ceil(goal_twosided.WORST_FLIGHTS / (2 * MAX_ITERATIONS)))
@@ -101,7 +107,7 @@ WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                                              + DEFLATED_STARTS + TURN_STARTS))
                  + max(2 * MAX_ITERATIONS * RESTARTS,
                        2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
-                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS))
+                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS + BALL_FLIGHTS))
 
 
 @dataclass(frozen=True)
@@ -317,7 +323,9 @@ class GoalSolver:
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
         (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
         for twist, linear or angular unknowns, the starts across the fold beside the nearest
-        solution (:func:`~rigid_sim.core.goal_fold.nearer`).
+        solution (:func:`~rigid_sim.core.goal_fold.nearer`), and where a flight is one exact
+        step the search of the ball the nearest must lie in
+        (:func:`~rigid_sim.core.goal_ball.nearer`).
         """
         first = problem.first_iterate()
         found = []
@@ -365,6 +373,10 @@ class GoalSolver:
             best = goal_lattice.nearer(problem, best)
         if not problem.wrench:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
+        if goal_ball.applies(problem):
+            rollout = self.rollout(problem.index, problem.goal.unknowns, problem.goal.axes,
+                                   goal_ball.CHUNK)
+            best = goal_ball.nearer(problem, best, rollout, BRANCH_ITERATIONS)
         return best
 
     def _restarted(self, problem, first):
