@@ -33,16 +33,22 @@ from rigid_sim.core.goal_newton import Newton, NoConvergence
 from rigid_sim.core.goal_problem import SAME_DISTANCE, TOLERANCE
 
 # rad of end orientation per grid step along the most sensitive direction: the spacing is
-# SPACING / sigma_1. Measured on tumbling_long's 100 targets (2026-12-04): 2 and 1 find the
-# same nearest solutions, 3 misses two of the seven targets the search is for.
-SPACING = 2.0
-GRID_POINTS = 32768    # grid points flown, at most: the nearest to the current motion
+# SPACING / sigma_1. Measured on the bench's targets of tumbling_long, tumbling, gravity and
+# spinning (100 each, 2026-12-04): 1 and 0.5 took the same solution on all 400; 2 took
+# one 1.32 times as far as the known on gravity, and 3 (a first prototype) two farther
+# on tumbling_long.
+SPACING = 1.0
+# Grid points flown, at most: the nearest to the current motion (the ball is cut to the
+# radius that holds them). On the same 400 targets 8192 took the same solutions as no cap
+# (whose CPU p99 was 1.0-1.1 s on tumbling_long and spinning), 4096 two farther on
+# tumbling_long, 2048 five: twice 8192, for margin.
+GRID_POINTS = 16384
 MINIMA = 512           # local minima Newton starts from, at most: the nearest
 ITERATIONS = 8         # of the batched Newton on the orientation
 DIFFERENCE = 1e-6      # its forward differences' step in z (sqrt(kg) m, ~1e-5 rad/s)
 ROOT = 1e-3            # rad: a minimum's Newton that ends nearer the goal is polished
 POLISHED = 4           # polishing starts, at most, each of `iterations` of the goal's Newton
-CHUNK = 128            # rows a flight of the grid: copies of one Rollout, built once a solver
+CHUNK = 128   # rows a flight of the grid: one Rollout's copies (built in ~3 ms, once a solver)
 # Flights (Rollout.fly calls of CHUNK rows) at most: the grid, the batched Newton's (four
 # rows a minimum, its first iterate and ITERATIONS trials); the polishing ones are the
 # goal's Newton's, `iterations` + 1 each, counted by the caller.
