@@ -12,8 +12,8 @@ velocity, so that velocity is unique at every solution, and with it fixed the me
 radius ``r``.
 
 On the 7 targets of the bench's ``tumbling_long`` (T = 10 s) whose solution was farther
-than the known change, the nearer solutions lay 0.1-0.8 rad/s from the one found, no whole
-turn nor fold away; no start reached them. The search:
+than the known change, the nearer solutions lay 1.0-3.2 rad/s from the one found, not a
+plain fold pair nor a whole turn away; no start reached them. The search:
 
 1. flies a grid of spacing ``h = SPACING / sigma_1`` over the ball (``sigma_1`` the
    largest singular value of the end orientation's Jacobian in ``z`` at the solution),
