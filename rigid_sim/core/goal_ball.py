@@ -47,6 +47,7 @@ MINIMA = 512           # local minima Newton starts from, at most: the nearest
 ITERATIONS = 8         # of the batched Newton on the orientation
 DIFFERENCE = 1e-6      # its forward differences' step in z (sqrt(kg) m, ~1e-5 rad/s)
 ROOT = 1e-3            # rad: a minimum's Newton that ends nearer the goal is polished
+SETTLED = 1e-9         # rad: the batched Newton stops once every minimum's is this near
 POLISHED = 4           # polishing starts, at most, each of `iterations` of the goal's Newton
 CHUNK = 128   # rows a flight of the grid: one Rollout's copies (built in ~3 ms, once a solver)
 # Flights (Rollout.fly calls of CHUNK rows) at most: the grid, the batched Newton's (four
@@ -143,7 +144,8 @@ def _newton_all(orientation, z, step):
 
     Return the ends (M, 3) and their residual angles (M,). Each iteration flies every
     trial with its three differences (one flight of 4 M rows): a trial that lowers the
-    angle is taken and its trust radius doubled, else the radius is quartered.
+    angle is taken and its trust radius doubled, else the radius is quartered. It stops
+    early once every angle is within SETTLED.
     """
     count = len(z)
     offsets = np.vstack((np.zeros(3), DIFFERENCE * np.eye(3)))
@@ -163,6 +165,8 @@ def _newton_all(orientation, z, step):
         fresh = np.nan_to_num((flown[:, 1:] - flown[:, :1]).transpose(0, 2, 1) / DIFFERENCE)
         jacobian = fresh if jacobian is None else np.where(taken[:, None, None], fresh,
                                                            jacobian)
+        if np.all(angles <= SETTLED):   # at T = 2 s mostly one minimum, the solution known
+            break
         change = -np.einsum('kij,kj->ki', np.linalg.pinv(jacobian), np.nan_to_num(residual))
         length = np.linalg.norm(change, axis=1)
         change *= np.minimum(1.0, radius / np.maximum(length, 1e-300))[:, None]
