@@ -69,9 +69,7 @@ def _ellipsoid(problem, best):
     ``distance(values(dw))^2 = lin^2 + |C^T (dw - dw_c)|^2``.
     """
     now = problem.current[-3:]
-    # Twist unknowns: the origin's velocity changes by -dw x (R c), as a whole turn's does.
-    keep = problem._lever_matrix if problem.count == 6 else np.zeros((0, 3))
-    shift = np.vstack((keep, np.eye(3)))   # (n, 3): a change of spin -> of the unknowns
+    shift = problem.spin_shift()   # (n, 3), the centre of mass's velocity kept
     base = best + shift @ (now - best[-3:])   # best's centre of mass velocity, spin now
 
     def values(spins):
@@ -121,7 +119,6 @@ class _Orientation:
     def __init__(self, problem, rollout, values, centre, whitening):
         self.problem, self.rollout, self.values = problem, rollout, values
         self.centre, self.unwhiten = problem.current[-3:] + centre, np.linalg.inv(whitening.T)
-        self.flights = 0
         rollout.prepare(problem.fine, problem.y)
 
     def spin_at(self, z):
@@ -135,7 +132,6 @@ class _Orientation:
         finals = []
         for first in range(0, len(rows), CHUNK):
             finals.append(self.rollout.fly(rows[first:first + CHUNK])[0])
-            self.flights += 1
         return self.problem.residual_of(np.concatenate(finals)[:count])[:, -3:]
 
 
@@ -208,13 +204,9 @@ def nearer(problem, best, rollout, iterations):
             break
         start = values(orientation.spin_at(ends[root][None]) - problem.current[-3:])[0]
         newton = Newton(problem, start)
-        ball = nearest
-
-        def within(u, ball=ball):
-            return problem.distance(u) < ball
-
-        try:
-            newton.converge(TOLERANCE, within, iterations)
+        try:   # abandoned once an iterate leaves the ball
+            newton.converge(TOLERANCE, lambda u, ball=nearest: problem.distance(u) < ball,
+                            iterations)
         except NoConvergence:
             continue
         distance = problem.distance(newton.values)
