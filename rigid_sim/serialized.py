@@ -15,8 +15,9 @@ import numpy as np
 from rclpy.serialization import serialize_message
 
 # The marks: the pose values k = 0..6 of frame i are MARK + 7 i + k, integers above 2^52
-# (exact doubles, far beyond any size or pose a scene holds); every header's stamp is
-# (MARK_SEC, MARK_NANOSEC). A mark found other than once is an error, never a guess.
+# (exact doubles, beyond the 1e15 a scene's every number is held to, so no size, scale or
+# colour can look like one); every header's stamp is (MARK_SEC, MARK_NANOSEC). A mark
+# found other than once is an error, never a guess.
 MARK = 2.0 ** 52
 MARK_SEC, MARK_NANOSEC = 2_000_000_011, 999_999_937
 # The serialised payload follows a 4-byte encapsulation header, and CDR aligns doubles to
