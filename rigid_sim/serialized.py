@@ -84,15 +84,24 @@ def _set(frame, values):
 
 
 def _marked_frames(doubles, count):
-    """Return the (count, 7) indices of the marked frame values in ``doubles``."""
-    found = np.flatnonzero((doubles >= MARK) & (doubles < MARK + VALUES * count))
-    labels = (doubles[found] - MARK).astype(np.int64)
-    if len(found) != VALUES * count or np.any(np.bincount(labels, minlength=VALUES * count) != 1):
-        raise RuntimeError(f'{len(found)} marked pose values found in the serialised '
-                           f'message, {VALUES * count} expected once each')
-    index = np.empty(VALUES * count, np.int64)
-    index[labels] = found
-    return index.reshape(count, VALUES)
+    """Return the (count, 7) indices of the marked frame values in ``doubles``.
+
+    A frame's values are found as a run of its seven marks, never one by one: CDR's padding
+    is not zeroed, so a double that spans padding may hold a mark's bytes left by an earlier
+    serialisation (seen: MARK itself just before a marker's pose, its high word stale).
+    """
+    labels = doubles - MARK
+    starts = np.flatnonzero((labels >= 0) & (labels < VALUES * count) & (labels % VALUES == 0))
+    starts = starts[starts + VALUES <= len(doubles)]
+    run = starts[:, None] + np.arange(VALUES)
+    starts = starts[np.all(labels[run] == labels[starts][:, None] + np.arange(VALUES), axis=1)]
+    frames = (labels[starts] // VALUES).astype(np.int64)
+    if len(starts) != count or np.any(np.bincount(frames, minlength=count) != 1):
+        raise RuntimeError(f'{len(starts)} runs of marked pose values found in the '
+                           f'serialised message, {count} expected once each')
+    index = np.empty(count, np.int64)
+    index[frames] = starts
+    return index[:, None] + np.arange(VALUES)
 
 
 def _marked_stamps(words, headers):

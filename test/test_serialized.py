@@ -91,12 +91,12 @@ def test_marking_the_fields_leaves_the_message_as_it_was():
     assert message == deserialize_message(before, PoseArray)
 
 
-def test_a_field_holding_a_mark_is_refused_not_guessed():
-    scene = parse_scene(yaml.safe_load(SHAPES))
-    markers = conversions.StateMessages(scene.bodies, 'world').markers
-    markers.markers[0].scale.x = MARK + 1.0   # looks like the second value of frame 0
-    poses = [(m.pose.position, m.pose.orientation) for m in markers.markers]
-    with pytest.raises(RuntimeError, match='marked pose values found'):
-        SerializedPoses(markers, poses, markers.markers[0].header.stamp, len(poses))
+def test_a_field_holding_a_frame_of_marks_is_refused_not_guessed():
+    message = PoseArray(poses=[Pose() for _ in range(2)])
+    conversions.fill_pose(message.poses[1], [MARK, MARK + 1, MARK + 2],
+                          [MARK + 3, MARK + 4, MARK + 5, MARK + 6])   # frame 0's marks
+    with pytest.raises(RuntimeError, match='runs of marked pose values found'):
+        SerializedPoses(message, [(message.poses[0].position, message.poses[0].orientation)],
+                        message.header.stamp, 1)
     with pytest.raises(RuntimeError, match='marked stamps found'):
-        SerializedPoses(MarkerArray(), [], markers.markers[0].header.stamp, 1)
+        SerializedPoses(MarkerArray(), [], message.header.stamp, 1)
