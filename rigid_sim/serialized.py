@@ -90,8 +90,10 @@ def _marked_frames(doubles, count):
     is not zeroed, so a double that spans padding may hold a mark's bytes left by an earlier
     serialisation (seen: MARK itself just before a marker's pose, its high word stale).
     """
-    labels = doubles - MARK
-    starts = np.flatnonzero((labels >= 0) & (labels < VALUES * count) & (labels % VALUES == 0))
+    with np.errstate(invalid='ignore'):   # bytes read as doubles: signalling NaNs among them
+        labels = doubles - MARK
+        starts = np.flatnonzero((labels >= 0) & (labels < VALUES * count)
+                                & (labels % VALUES == 0))
     starts = starts[starts + VALUES <= len(doubles)]
     run = starts[:, None] + np.arange(VALUES)
     starts = starts[np.all(labels[run] == labels[starts][:, None] + np.arange(VALUES), axis=1)]
