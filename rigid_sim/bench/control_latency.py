@@ -13,10 +13,11 @@ one core can tick), a goal on the springs scene, a flood of goals (150 Hz), 1000
 a tick on 1000 bodies, dopri5 at tolerance 1e-12 on a rod spinning at 10 000 rad/s, a
 GetEntitiesStates of 20 000 bodies (refused: more states than ``max_answer_states``) and
 of 2000 (that bound's default), a spawn into a scene of 5000 bodies (one
-SpawnEntity makes one entity; the swap carries all 5001), and another process hearing
-every topic of 1000 bodies (their pose, twist and odometry, the PoseArray, the markers and
-/tf; sampled for 10 s once the last body's pose has come). The node promises each
-answer within 100 ms and each stop, with status 0, within 0.5 s. The machine's load
+SpawnEntity makes one entity; the swap carries all 5001), another process hearing every
+topic of 1000 bodies (their pose, twist and odometry, the PoseArray, the markers and /tf;
+sampled for 10 s once the last body's pose has come), and an RViz-like process hearing
+the markers, poses and /tf of 10 000 bodies at rate 30 (sampled for 10 s). The node
+promises each answer within 100 ms and each stop, with status 0, within 0.5 s. The machine's load
 average over the run is given: other processes' load lengthens every number.
 """
 import os
@@ -67,9 +68,10 @@ print('sent', flush=True)
 rclpy.spin_until_future_complete(node, future, timeout_sec={ANSWER_TIMEOUT})
 print(len(future.result().states) if future.done() else 'no answer', flush=True)
 """
-# A client process that subscribes to every topic of the boxes_N scene's N bodies (pose,
-# twist and odometry each) and to ~/poses, ~/markers and /tf, says "heard" once the last
-# body's pose has come, and takes what comes until it is killed.
+# A client process that subscribes to every topic of the boxes_N scene's first N bodies
+# (pose, twist and odometry each; N = 0: none, as RViz) and to ~/poses, ~/markers and /tf,
+# says "heard" once the last body's pose (or two messages) has come, and takes what comes
+# until it is killed.
 HEARER = """
 import os, sys, rclpy
 from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
@@ -87,9 +89,10 @@ subscriptions = [node.create_subscription(kind, f'/rigid_sim/box{i}/{topic}', he
 for kind, topic, qos in ((PoseArray, '/rigid_sim/poses', 1),
                          (MarkerArray, '/rigid_sim/markers', 1), (TFMessage, '/tf', TF_QOS)):
     subscriptions.append(node.create_subscription(kind, topic, heard.append, qos))
-last = []
-node.create_subscription(PoseStamped, f'/rigid_sim/box{bodies - 1}/pose', last.append, 1)
-while not last:
+last = []   # the last body's pose; without per-body topics, the markers and /tf
+if bodies:
+    node.create_subscription(PoseStamped, f'/rigid_sim/box{bodies - 1}/pose', last.append, 1)
+while not last if bodies else len(heard) < 2:
     rclpy.spin_once(node, timeout_sec=0.1)
 print('heard', flush=True)
 while True:
@@ -97,6 +100,7 @@ while True:
     heard.clear()
 """
 HEARD_BODIES = 1000
+RVIZ_BODIES = 10_000   # bodies whose ~/markers, ~/poses and /tf an RViz-like client hears
 # A state: its name, its scene ('boxes': the N boxes the caller gives, a scene file's
 # name in the log directory, or a packaged one), node parameters, the work the client
 # starts and whether the kernel cache starts empty.
@@ -124,6 +128,8 @@ STATES = (
     State(f'every topic of {HEARD_BODIES} bodies heard (pose, twist, odom, ~/poses, '
           '~/markers, /tf)', f'boxes_{HEARD_BODIES}',
           ['rate:=100.0', f'per_body_topics_limit:={HEARD_BODIES}'], 'hear', False),
+    State(f'RViz-like: ~/markers, ~/poses and /tf of {RVIZ_BODIES} bodies heard',
+          f'boxes_{RVIZ_BODIES}', ['rate:=30.0'], 'rviz', False),
 )
 
 
@@ -198,8 +204,9 @@ def _start_work(client, work, log_dir):
                                          stdout=subprocess.PIPE, text=True)
         client.caller.stdout.readline()   # sent
         return None
-    if work == 'hear':   # another process: taking 9000 topics' messages would slow this one
-        client.caller = subprocess.Popen([sys.executable, '-c', HEARER, str(HEARD_BODIES)],
+    if work in ('hear', 'rviz'):   # another process: taking them would slow this one
+        bodies = HEARD_BODIES if work == 'hear' else 0
+        client.caller = subprocess.Popen([sys.executable, '-c', HEARER, str(bodies)],
                                          stdout=subprocess.PIPE, text=True)
         client.caller.stdout.readline()   # heard
         return None
@@ -231,9 +238,9 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
             if work == 'step':
                 client.call(SetBool, 'pause', SetBool.Request(data=True))
             answer = _start_work(client, work, log_dir)
-            until = time.monotonic() + (FLOOD_SECONDS if work in ('flood', 'hear')
+            until = time.monotonic() + (FLOOD_SECONDS if work in ('flood', 'hear', 'rviz')
                                         else ANSWER_TIMEOUT)
-            busy = {'flood': lambda: True, 'hear': lambda: True,
+            busy = {'flood': lambda: True, 'hear': lambda: True, 'rviz': lambda: True,
                     'states': lambda: client.caller.poll() is None,
                     'spawn': lambda: not answer.done()}.get(work, lambda: False)
             asked = []   # SAMPLES at least, and while the work lasts

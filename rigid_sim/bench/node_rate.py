@@ -420,7 +420,8 @@ def main(args):
             starts = run_starts(chosen['start_sizes'], log_dir)
         if chosen.get('control', True) and args.control:
             scenes = {}
-            for n in (1000, 2000, control_latency.HEARD_BODIES, 5000, 20_000):
+            for n in (1000, 2000, control_latency.HEARD_BODIES, 5000,
+                      control_latency.RVIZ_BODIES, 20_000):
                 scenes[f'boxes_{n}'] = str(Path(log_dir, f'boxes_{n}.yaml'))
                 Path(scenes[f'boxes_{n}']).write_text(scene_text(n))
             scenes['fast_rod'] = str(Path(log_dir, 'fast_rod.yaml'))
