@@ -32,7 +32,7 @@ import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
 from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_fold, goal_lattice, goal_twosided
+from rigid_sim.core import goal_fold, goal_lattice, goal_torques, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
@@ -101,7 +101,8 @@ WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                                              + DEFLATED_STARTS + TURN_STARTS))
                  + max(2 * MAX_ITERATIONS * RESTARTS,
                        2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
-                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS))
+                 + max(goal_lattice.WORST_FLIGHTS + goal_torques.WORST_FLIGHTS,
+                       FOLD_FLIGHTS))
 
 
 @dataclass(frozen=True)
@@ -363,6 +364,8 @@ class GoalSolver:
             best = self._deflated(problem, best, (problem.current, first))
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
+            best = goal_torques.nearer(problem, best, lambda copies: self.rollout(
+                problem.index, problem.goal.unknowns, problem.goal.axes, copies))
         if not problem.wrench:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         return best

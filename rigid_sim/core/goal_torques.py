@@ -1,0 +1,193 @@
+# Copyright 2026 rigid_sim maintainers
+# SPDX-License-Identifier: Apache-2.0
+"""A held wrench's nearer solutions: Newton from starts that fill the torque ellipsoid.
+
+The force a held wrench needs is unique (the centre of mass moves linearly in it, and it
+does not turn the body), so of the metric of "nearest" (:meth:`GoalProblem.distance`) its
+part is fixed: a solution nearer than one at distance ``d`` has its torque in the
+ellipsoid ``tau . M tau < d^2 - |F|_M^2`` (``M`` the metric's torque block). The torques
+that reach one end orientation fill it as a curved lattice: at T = 10 s (the bench's
+``wrench_long``) the orientation's Jacobian has singular values ~2000, ~100 and ~30 rad per
+N m, and the most sensitive direction points away from the torque ``-2 L0 / T`` that
+makes the mean angular momentum vanish (|cosine| median 0.995), so the lattice's sheets
+are shells about it, curved on the scale of the ellipsoid, and a walk by the linear model
+(:mod:`~rigid_sim.core.goal_lattice`) misses where they bend.
+
+So the ellipsoid is searched: seeded starts drawn uniformly in it, nearest first, in
+batches of BATCH; each batch's Newton runs on a sketch flight of at most SKETCH_STEPS
+steps (the orientation errs 0.01-0.2 rad there at T = 10 s, small against a whole turn),
+all starts' differences in one compiled call an iteration, a start abandoned once it is
+SLACK times farther than the nearest torque so far. What converges is polished on the
+coarse flight (batched too), the ellipsoid shrinks to the nearest found, and the batches
+stop where their starts lie outside it. The nearest is polished on the fine flight and
+kept only if it converges nearer than the solution it started from.
+"""
+import math
+
+import numpy as np
+
+from rigid_sim.core.goal_flight import Flight
+from rigid_sim.core.goal_newton import MAX_ITERATIONS, Newton, NoConvergence
+from rigid_sim.core.goal_problem import (COARSE_GAIN, COARSE_TOLERANCE, SAME_DISTANCE,
+                                         TOLERANCE)
+
+STARTS = 1024       # drawn in the ellipsoid, at most
+BATCH = 64          # starts flown together
+ITERATIONS = 8      # of Newton from each start, on the sketch flight
+POLISH = 5          # iterations of the coarse polish of a sketch solution
+SKETCH_STEPS = 25   # steps of the sketch flight, at most (no more than the coarse one's)
+SKETCH_TOLERANCE = 1e-6   # rad: a start has converged on the sketch flight
+# Relative: a start's iterate farther than this times the nearest torque is abandoned; a
+# sketch solution farther than this is not polished (the sketch's own error moves it).
+SLACK = 1.1
+SEED = 30000
+# rad of the end orientation a Newton step may aim at, at most: a start farther than a
+# turn from its solution is stepped there in parts rather than flung across the lattice.
+LONGEST_STEP = 2.0
+# Flights, as goals.WORST_FLIGHTS counts them: a call of 4 BATCH copies of the sketch or
+# coarse flight (each at most 1 / COARSE_GAIN of the fine flight's steps) counts as the
+# fine flights of the goal's 7 copies that make as much work.
+# The copies a call flies: the fewest of these that hold its rows.
+ROWS = np.array([4, 16, 64, 4 * BATCH])
+CALL_WEIGHT = math.ceil(4 * BATCH / (7 * COARSE_GAIN))
+WORST_FLIGHTS = (math.ceil(STARTS / BATCH) * (ITERATIONS + 1 + POLISH + 1) * CALL_WEIGHT
+                 + 2 * (MAX_ITERATIONS + 1))
+
+
+class _Torques:
+    """The end orientation's residual at held torques, the force fixed, many at once."""
+
+    def __init__(self, problem, rollouts, force):
+        self.problem, self.rollouts, self.force = problem, rollouts, force
+        self.steps = problem.steps[3:]
+        self.flight = None
+        self._prepared = {}   # copies -> the flight its rollout was last prepared for
+
+    def fly_on(self, flight):
+        """Fly the rows over ``flight``."""
+        self.flight = flight
+
+    def residuals(self, torques):
+        """Return the orientation residuals (K, 3) at K torques (K, 3), K <= 4 BATCH."""
+        count = len(torques)
+        copies = int(ROWS[np.searchsorted(ROWS, count)])
+        rollout = self.rollouts(copies)
+        if self._prepared.get(copies) is not self.flight:
+            rollout.prepare(self.flight, self.problem.y)
+            self._prepared[copies] = self.flight
+        values = np.empty((copies, 6))
+        values[:, :3] = self.force
+        values[:count, 3:] = torques
+        values[count:, 3:] = torques[0]   # the rows left over fly a copy of the first
+        final, _ = rollout.fly(self.problem.start_rows(values), values)
+        return self.problem.residual_of(final)[:count, 3:]
+
+    def differences(self, torques):
+        """Residuals (K, 3) and forward-difference Jacobians (K, 3, 3): one call."""
+        offsets = np.vstack((np.zeros(3), np.diag(self.steps)))
+        rows = (torques[:, None, :] + offsets).reshape(-1, 3)
+        flown = self.residuals(rows).reshape(len(torques), 4, 3)
+        jacobians = (flown[:, 1:] - flown[:, :1]).transpose(0, 2, 1) / self.steps
+        return flown[:, 0], jacobians
+
+    def newton(self, torques, iterations, tolerance, reach=None):
+        """Batched Newton from ``torques`` (K, 3); the iterates and which converged.
+
+        ``reach(torques) -> bool (K,)``: where an iterate leaves it, that start is dropped.
+        """
+        torques = torques.copy()
+        alive = np.ones(len(torques), dtype=bool)
+        converged = np.zeros(len(torques), dtype=bool)
+        for iteration in range(iterations + 1):
+            active = np.flatnonzero(alive & ~converged)
+            if not active.size:
+                break
+            if iteration == iterations:   # the last iterates' residuals only
+                residual = self.residuals(torques[active])
+                converged[active] = np.linalg.norm(residual, axis=1) <= tolerance
+                break
+            residual, jacobian = self.differences(torques[active])
+            size = np.linalg.norm(residual, axis=1)
+            done = size <= tolerance
+            converged[active[done]] = True
+            moving = active[~done]
+            finite = np.isfinite(residual[~done]).all(axis=1) & np.isfinite(
+                jacobian[~done]).all(axis=(1, 2))
+            alive[moving[~finite]] = False
+            moving, residual = moving[finite], residual[~done][finite]
+            jacobian, size = jacobian[~done][finite], size[~done][finite]
+            singular = np.abs(np.linalg.det(jacobian)) < 1e-300
+            alive[moving[singular]] = False
+            moving, residual, jacobian, size = (moving[~singular], residual[~singular],
+                                                jacobian[~singular], size[~singular])
+            step = np.linalg.solve(jacobian, -residual[..., None])[..., 0]
+            torques[moving] += step * np.minimum(1.0, LONGEST_STEP / size)[:, None]
+            if reach is not None:
+                alive[moving[~reach(torques[moving])]] = False
+        return torques, converged & alive
+
+
+def _ball_points(count):
+    """Seeded points (count, 3) uniform in the unit ball, nearest the centre first."""
+    rng = np.random.default_rng(SEED)
+    points = rng.standard_normal((count, 3))
+    points /= np.linalg.norm(points, axis=1)[:, None]
+    points *= rng.uniform(size=(count, 1)) ** (1.0 / 3.0)
+    return points[np.argsort(np.linalg.norm(points, axis=1))]
+
+
+def nearer(problem, best, rollouts):
+    """Return ``best`` (a converged Newton on the fine flight) or a nearer solution.
+
+    ``problem``: a held wrench's, with a coarse flight; it is left flying the fine one.
+    ``rollouts(copies)``: the Rollout of that many copies of the goal's body.
+    """
+    force, current = best.values[:3], problem.current[3:]
+    metric = problem.metric[3:, 3:]
+    forced = float(force @ problem.metric[:3, :3] @ force)
+    radius = math.sqrt(max(problem.distance(best.values) ** 2 - forced, 0.0))
+    if not radius > 0.0:
+        return best
+    torques = _Torques(problem, rollouts, force)
+    sketch = Flight(problem.world, min(SKETCH_STEPS, problem.coarse.steps),
+                    problem.horizon / min(SKETCH_STEPS, problem.coarse.steps),
+                    problem.fine.held)
+
+    def size(values):
+        change = values - current
+        return np.sqrt(np.maximum(np.einsum('ij,jk,ik->i', change, metric, change), 0.0))
+
+    points = _ball_points(STARTS)
+    spread = np.linalg.inv(np.linalg.cholesky(metric)).T   # unit ball -> metric ball
+    nearest, found = radius, []
+    for first in range(0, STARTS, BATCH):
+        batch = points[first:first + BATCH]
+        if np.linalg.norm(batch[0]) * radius >= nearest:
+            break
+        starts = current + radius * batch @ spread.T
+        torques.fly_on(sketch)
+        solved, converged = torques.newton(starts, ITERATIONS, SKETCH_TOLERANCE,
+                                           lambda t: size(t) <= SLACK * nearest)
+        solved = solved[converged]
+        solved = solved[size(solved) <= SLACK * nearest]
+        if not solved.size:
+            continue
+        torques.fly_on(problem.coarse)
+        polished, converged = torques.newton(solved, POLISH, COARSE_TOLERANCE)
+        for values in polished[converged]:
+            distance = float(size(values[None])[0])
+            if distance < nearest * (1.0 - SAME_DISTANCE):
+                nearest = distance
+                found.append(values)
+    problem.fly_on(problem.fine)
+    reference = problem.distance(best.values)
+    for values in sorted(found, key=lambda t: size(t[None])[0])[:2]:
+        polished = Newton(problem, np.concatenate((force, values)))
+        try:
+            polished.converge(TOLERANCE, iterations=MAX_ITERATIONS)
+        except NoConvergence:
+            continue
+        if problem.distance(polished.values) < reference * (1.0 - SAME_DISTANCE):
+            polished.iterations += best.iterations
+            return polished
+    return best
