@@ -68,7 +68,7 @@ class _Torques:
         self.flight = flight
 
     def residuals(self, torques):
-        """Return the orientation residuals (K, 3) at K torques (K, 3), K <= 4 BATCH."""
+        """Return the orientation's residual at each of K <= 4 BATCH torques: (K, 3)."""
         count = len(torques)
         copies = int(ROWS[np.searchsorted(ROWS, count)])
         rollout = self.rollouts(copies)
