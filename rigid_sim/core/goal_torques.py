@@ -31,7 +31,7 @@ from rigid_sim.core.goal_newton import MAX_ITERATIONS, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_GAIN, COARSE_TOLERANCE, SAME_DISTANCE,
                                          TOLERANCE)
 
-STARTS = 1024       # drawn in the ellipsoid, at most
+STARTS = 2048       # drawn in the ellipsoid, at most
 BATCH = 64          # starts flown together
 ITERATIONS = 8      # of Newton from each start, on the sketch flight
 POLISH = 5          # iterations of the coarse polish of a sketch solution
@@ -44,15 +44,17 @@ SEED = 30000
 # rad of the end orientation a Newton step may aim at, at most: a start farther than a
 # turn from its solution is stepped there in parts rather than flung across the lattice.
 LONGEST_STEP = 2.0
-# Flights, as goals.WORST_FLIGHTS counts them: a call of 4 BATCH copies of the sketch or
-# coarse flight (each at most 1 / COARSE_GAIN of the fine flight's steps) counts as the
-# fine flights of the goal's 7 copies that make as much work.
-# The copies a call flies: the fewest of these that hold its rows.
-ROWS = np.array([4, 16, 64, 4 * BATCH])
-CALL_WEIGHT = math.ceil(4 * BATCH / (7 * COARSE_GAIN))
-WORST_FLIGHTS = (math.ceil(STARTS / BATCH) * (ITERATIONS + 1 + POLISH + 1) * CALL_WEIGHT
+# Sketch solutions polished on the coarse flight a batch, nearest first, at most; two within
+# SAME of each other (relative, by the metric) are one.
+POLISHED = 7
+SAME = 1e-3
+# Flights, as goals.WORST_FLIGHTS counts them: each call, of the sketch flight or of the
+# coarse polish, makes no more work than one flight of the goal's 7 copies on the fine
+# grid (the sketch's steps are cut to 7 / (4 BATCH) of the fine flight's, the polish flies
+# 4 POLISHED rows of a coarse flight COARSE_GAIN times shorter than the fine one), counted
+# as one; then the polish of at most two on the fine flight.
+WORST_FLIGHTS = (math.ceil(STARTS / BATCH) * (ITERATIONS + 1 + POLISH + 1)
                  + 2 * (MAX_ITERATIONS + 1))
-
 
 class _Torques:
     """The end orientation's residual at held torques, the force fixed, many at once."""
@@ -136,26 +138,37 @@ def _ball_points(count):
     return points[np.argsort(np.linalg.norm(points, axis=1))]
 
 
+def _distinct(torques, size):
+    """Return ``torques`` (K, 3) nearest first, less any within SAME of a nearer one."""
+    torques = torques[np.argsort(size(torques))]
+    kept = []
+    for values in torques:
+        if all(size((values - other)[None])[0] > SAME * max(size(values[None])[0], 1e-12)
+               for other in kept):
+            kept.append(values)
+    return np.array(kept).reshape(-1, 3)
+
+
 def nearer(problem, best, rollouts):
     """Return ``best`` (a converged Newton on the fine flight) or a nearer solution.
 
     ``problem``: a held wrench's, with a coarse flight; it is left flying the fine one.
     ``rollouts(copies)``: the Rollout of that many copies of the goal's body.
     """
-    force, current = best.values[:3], problem.current[3:]
+    force = best.values[:3]   # the current wrench unknowns are zero (GoalProblem.current)
     metric = problem.metric[3:, 3:]
     forced = float(force @ problem.metric[:3, :3] @ force)
     radius = math.sqrt(max(problem.distance(best.values) ** 2 - forced, 0.0))
     if not radius > 0.0:
         return best
+    steps = min(SKETCH_STEPS, problem.coarse.steps, 7 * problem.grid.steps // (4 * BATCH))
+    if steps < 1:
+        return best
     torques = _Torques(problem, rollouts, force)
-    sketch = Flight(problem.world, min(SKETCH_STEPS, problem.coarse.steps),
-                    problem.horizon / min(SKETCH_STEPS, problem.coarse.steps),
-                    problem.fine.held)
+    sketch = Flight(problem.world, steps, problem.horizon / steps, problem.fine.held)
 
     def size(values):
-        change = values - current
-        return np.sqrt(np.maximum(np.einsum('ij,jk,ik->i', change, metric, change), 0.0))
+        return np.sqrt(np.maximum(np.einsum('ij,jk,ik->i', values, metric, values), 0.0))
 
     points = _ball_points(STARTS)
     spread = np.linalg.inv(np.linalg.cholesky(metric)).T   # unit ball -> metric ball
@@ -164,12 +177,12 @@ def nearer(problem, best, rollouts):
         batch = points[first:first + BATCH]
         if np.linalg.norm(batch[0]) * radius >= nearest:
             break
-        starts = current + radius * batch @ spread.T
+        starts = radius * batch @ spread.T
         torques.fly_on(sketch)
         solved, converged = torques.newton(starts, ITERATIONS, SKETCH_TOLERANCE,
                                            lambda t: size(t) <= SLACK * nearest)
-        solved = solved[converged]
-        solved = solved[size(solved) <= SLACK * nearest]
+        solved = _distinct(solved[converged], size)
+        solved = solved[size(solved) <= SLACK * nearest][:POLISHED]
         if not solved.size:
             continue
         torques.fly_on(problem.coarse)
