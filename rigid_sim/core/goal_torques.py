@@ -28,8 +28,7 @@ import numpy as np
 
 from rigid_sim.core.goal_flight import Flight
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, Newton, NoConvergence
-from rigid_sim.core.goal_problem import (COARSE_GAIN, COARSE_TOLERANCE, SAME_DISTANCE,
-                                         TOLERANCE)
+from rigid_sim.core.goal_problem import COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE
 
 STARTS = 2048       # drawn in the ellipsoid, at most
 BATCH = 64          # starts flown together
@@ -48,6 +47,7 @@ LONGEST_STEP = 2.0
 # SAME of each other (relative, by the metric) are one.
 POLISHED = 7
 SAME = 1e-3
+ROWS = np.array([4 * POLISHED, 4 * BATCH])   # the copies a call flies: the fewest that hold it
 # Flights, as goals.WORST_FLIGHTS counts them: each call, of the sketch flight or of the
 # coarse polish, makes no more work than one flight of the goal's 7 copies on the fine
 # grid (the sketch's steps are cut to 7 / (4 BATCH) of the fine flight's, the polish flies
@@ -55,6 +55,7 @@ SAME = 1e-3
 # as one; then the polish of at most two on the fine flight.
 WORST_FLIGHTS = (math.ceil(STARTS / BATCH) * (ITERATIONS + 1 + POLISH + 1)
                  + 2 * (MAX_ITERATIONS + 1))
+
 
 class _Torques:
     """The end orientation's residual at held torques, the force fixed, many at once."""
