@@ -12,9 +12,10 @@ solutions it finds (by continuation from the current motion, from the current mo
 corrected by the least move that closes its gap, on the branches a whole turn away and,
 where a flight is one exact step, by deflation of those found,
 :mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
-the end orientation, :mod:`~rigid_sim.core.goal_lattice`; for the others, across the fold
-beside the solution, :mod:`~rigid_sim.core.goal_fold`) it
-takes the nearest to the current motion by the impulse norm of
+the end orientation, :mod:`~rigid_sim.core.goal_lattice`, and by Newton from starts filling
+the ellipsoid of nearer torques, :mod:`~rigid_sim.core.goal_torques`; for the others,
+across the fold beside the solution, :mod:`~rigid_sim.core.goal_fold`) it takes the
+nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
 
@@ -90,9 +91,9 @@ FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
-# deflated solves; then a held wrench's walk on the lattice of whole turns (its own bound)
-# or a twist's starts across its fold, never both. The node decides by it whether a goal
-# is solved in the tick.
+# deflated solves; then a held wrench's walk on the lattice of whole turns and search of
+# its torque ellipsoid (their own bounds) or a twist's starts across its fold, never both.
+# The node decides by it whether a goal is solved in the tick.
 # The seeded draws where the two-sided meetings (:mod:`~rigid_sim.core.goal_twosided`) come
 # first: as many fewer as leave the meetings' flights within those of the draws left out.
 MET_RESTARTS = RESTARTS - int(np.ceil(goal_twosided.WORST_FLIGHTS / (2 * MAX_ITERATIONS)))
@@ -316,7 +317,9 @@ class GoalSolver:
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
         the deflated solves (a flight of one exact step) or a held wrench's lattice walk
-        (a flight with a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`); last,
+        and the search of its torque ellipsoid (a flight with a coarse grid,
+        :func:`~rigid_sim.core.goal_lattice.nearer`,
+        :func:`~rigid_sim.core.goal_torques.nearer`); last,
         for twist, linear or angular unknowns, the starts across the fold beside the nearest
         solution (:func:`~rigid_sim.core.goal_fold.nearer`).
         """
