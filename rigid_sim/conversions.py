@@ -3,9 +3,11 @@
 """Messages <-> arrays: the only place ROS messages meet the core's numpy arrays.
 
 Output messages are built once per scene and refilled on every publication: the pose of a
-body is one ``Pose`` object shared by its PoseStamped, its Odometry, the PoseArray and its
-marker, and one ``Time`` object is the stamp of them all. rclpy serialises a message when it
-is published, so reusing the objects is safe and saves building ~10 messages per body per tick.
+body is one ``Pose`` object shared by its PoseStamped and its Odometry, and one ``Time``
+object is the stamp of them all. rclpy serialises a message when it is published, so reusing
+the objects is safe and saves building ~10 messages per body per tick. The messages of every
+body (the PoseArray, the markers, /tf) are kept serialised instead
+(:mod:`rigid_sim.serialized`), their poses written into the bytes.
 Quaternions are (x, y, z, w) in ROS messages and in the core alike.
 """
 import numpy as np
@@ -16,6 +18,8 @@ from geometry_msgs.msg import (
 from nav_msgs.msg import Odometry, Path
 from sensor_msgs.msg import Imu, MagneticField
 from visualization_msgs.msg import Marker, MarkerArray
+
+from rigid_sim.serialized import SerializedPoses
 
 NANOSECONDS = 1_000_000_000
 # One colour per body, cycled: distinguishable shapes in RViz (RGBA, 0..1).
@@ -69,11 +73,13 @@ class StateMessages:
     poses, twists, odometry : list of N PoseStamped, TwistStamped, Odometry
         One per body, in scene order.
     pose_array : PoseArray
-        The same N Pose objects.
+        The same N Pose objects, as built (the poses go out by ``serialized_poses``).
     markers : MarkerArray
-        One marker per body, sharing the same Pose objects.
+        One marker per body, sharing the same Pose objects, as built (``serialized_markers``).
+    serialized_poses, serialized_markers : rigid_sim.serialized.SerializedPoses
+        The PoseArray and the markers, serialised: each publication writes every pose.
     transforms : list of N TransformStamped
-        World_frame -> body frame, filled by :meth:`fill_transforms`.
+        World_frame -> body frame, as built: /tf goes out serialised (StateOutputs).
     """
 
     def __init__(self, bodies, world_frame, frame_prefix=''):
@@ -96,6 +102,9 @@ class StateMessages:
             header.stamp = self.stamp
         for odometry, pose in zip(self.odometry, shared_poses):
             odometry.pose.pose = pose
+        frames = [(pose.position, pose.orientation) for pose in shared_poses]
+        self.serialized_poses = SerializedPoses(self.pose_array, frames, self.stamp, 1)
+        self.serialized_markers = SerializedPoses(self.markers, frames, self.stamp, len(frames))
 
     def fill(self, snapshot, posed, moving):
         """Write the poses of ``posed`` and the twists of ``moving`` at ``snapshot``.
@@ -119,19 +128,6 @@ class StateMessages:
             row = rows[index]
             _set_twist(self.twists[index].twist, row[7:13])
             _set_twist(self.odometry[index].twist.twist, row[13:19])
-
-    def fill_transforms(self):
-        """Copy every body's current Pose (as filled last) into its TransformStamped."""
-        for transform, pose in zip(self.transforms, self.pose_array.poses):
-            copy_pose_to_transform(pose, transform.transform)
-
-
-def copy_pose_to_transform(pose, transform):
-    """Write a geometry_msgs/Pose into a geometry_msgs/Transform (the same rigid motion)."""
-    p, t = pose.position, transform.translation
-    t.x, t.y, t.z = p.x, p.y, p.z
-    q, r = pose.orientation, transform.rotation
-    r.x, r.y, r.z, r.w = q.x, q.y, q.z, q.w
 
 
 def static_transforms(bodies, frame_prefix, seconds):

@@ -216,7 +216,7 @@ class GoalInput:
 
     def _in_tick(self, goal, settings):
         # A free flight under the exact flow is one step, but not a cheap solve: the search
-        # for the nearest solution (continuation, branches of whole turns, deflation) takes a
+        # for the nearest solution (continuation, branches of whole turns, the ball) takes a
         # median 20 ms of Python, and a flood of random goals held parameter calls 173 ms at
         # p99 when such solves ran in the tick (docs/goals.md). It goes to the worker too.
         loop = getattr(self._node, 'loop', None)

@@ -10,6 +10,7 @@ reports its health. :meth:`RigidSimNode.tick` applies the stored inputs, advance
 world and publishes; tests call it directly for deterministic steps.
 """
 import time
+from collections import namedtuple
 
 from rclpy.node import Node
 
@@ -90,8 +91,13 @@ def warm_up(world, name, logger, integrator=None, imus=None):
     return compiled
 
 
+# What a job made for the running scene: an integrator (an integrator or tolerance change)
+# and the frame messages (StateOutputs.frame_messages, a change of frame names), or None.
+Retuned = namedtuple('Retuned', 'integrator frame')
+
+
 class TickInProgress:
-    """The steps of one tick still to take, for the world it began on."""
+    """The steps of one tick still to take, for the world it began on, then its publication."""
 
     def __init__(self, world, steps):
         self.world = world
@@ -99,6 +105,7 @@ class TickInProgress:
         self.left = steps
         self.busy = 0.0          # s of wall time the tick has taken so far
         self.slices = 0          # times it returned to the loop before its end
+        self.stepped = False     # its steps are all taken, counted, and /clock and IMUs sent
 
 
 def check_frames(scene, settings):
@@ -230,8 +237,9 @@ class RigidSimNode(Node):
         """Run one tick, or what is left of the one in progress; whether it is done.
 
         ``until`` (a ``time.perf_counter`` deadline; None: no limit) ends the tick's steps
-        early, after at least one: the loop runs the rest in its next executor rounds, with
-        control answered between them (docs/design.md, "Control apart from the work").
+        early, after at least one, and its publication to many per-body topics: the loop
+        runs the rest in its next executor rounds, with control answered between them
+        (docs/design.md, "Control apart from the work").
         ``advance`` is read when a tick starts only.
         """
         started = time.perf_counter()
@@ -243,13 +251,17 @@ class RigidSimNode(Node):
         ticking.busy += time.perf_counter() - started
         if not self._advance(ticking, until):
             return False
+        if not ticking.stepped:
+            ticking.stepped = True
+            self.health.stats.add(ticking.busy)
+            if self.settings.publish_clock:
+                self.clock.publish(self.world.time)
+            self.imu_outputs.publish(self.world)
+        if self.ticks % self.settings.publish_every == 0 and not self.outputs.publish(
+                self.world, until):
+            ticking.slices += 1
+            return False
         self._ticking = None
-        self.health.stats.add(ticking.busy)
-        if self.settings.publish_clock:
-            self.clock.publish(self.world.time)
-        self.imu_outputs.publish(self.world)
-        if self.ticks % self.settings.publish_every == 0:
-            self.outputs.publish(self.world)
         self.ticks += 1
         return True
 
@@ -312,46 +324,58 @@ class RigidSimNode(Node):
     def prepare(self, settings, scene_changed):
         """Build what ``settings`` need and compile its kernels (in the owner's worker).
 
-        Returns a new (scene, world, wiring) when ``scene_changed``, else an integrator for the
-        running world, which stays the running one while the job runs (the owner's jobs run
-        one at a time and only they replace it). Nothing the node runs is changed.
+        Returns a new (scene, world, wiring) when ``scene_changed``, else a :class:`Retuned`
+        for the running world and scene, which stay the running ones while the job runs (the
+        owner's jobs run one at a time and only they replace them). Nothing the node runs is
+        changed.
         """
         if scene_changed:
             scene, world = load(settings)
             warm_up(world, settings.integrator, self.get_logger(),
                     imus=scene_imus(scene, world))
             return scene, world, self.plan_wiring(scene, settings)
-        integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
-        warm_up(self.world, settings.integrator, self.get_logger(), integrator)
-        return integrator
+        running, integrator, frame = self.settings, None, None
+        if (settings.integrator, settings.tolerance) != (running.integrator, running.tolerance):
+            integrator = make_integrator(settings.integrator, self.world, settings.tolerance)
+            warm_up(self.world, settings.integrator, self.get_logger(), integrator)
+        frames = settings.world_frame, settings.frame_prefix
+        if frames != (running.world_frame, running.frame_prefix):
+            frame = self.outputs.frame_messages(self.scene, *frames)
+        return Retuned(integrator, frame)
 
     def swap(self, settings, prepared):
         """Run what :meth:`prepare` made for ``settings``, between two ticks (by the owner)."""
-        if isinstance(prepared, tuple):
+        if isinstance(prepared, Retuned):
+            self.owner.swap(settings, integrator=prepared.integrator, frame=prepared.frame)
+        else:
             scene, world, wiring = prepared
             self.owner.swap(settings, scene, world, wiring=wiring)
             # Setting the same file again reloads it too: say that time went back.
             self.get_logger().info(f'loaded {self.scene.path}: every body at its initial '
                                    'state, time 0, no wrench held')
-        else:
-            self.owner.swap(settings, integrator=prepared)
 
-    def apply(self, previous):
-        """Act on the change of the settings from ``previous`` to the running ones."""
+    def apply(self, previous, frame=None, rewired=False):
+        """Act on the change of the settings from ``previous`` to the running ones.
+
+        ``frame``: the messages of new frame names, made beside (None: made here), unless
+        the scene was ``rewired`` with them. Returns the messages replaced, if any, for the
+        caller to free beside (freeing 10 000 bodies' takes as long as making them).
+        """
         settings = self.settings
         self.world.control.tolerance = settings.tolerance
         self.world.control.error_control = settings.error_control
         frames = (settings.world_frame, settings.frame_prefix)
-        if frames != (previous.world_frame, previous.frame_prefix):
-            self.outputs.set_frame(self.scene, *frames)
+        replaced = None
+        if frames != (previous.world_frame, previous.frame_prefix) and not rewired:
+            replaced = self.outputs.set_frame(self.scene, *frames, frame)
             self.imu_outputs.set_frame_prefix(settings.frame_prefix)
         if settings.rate != previous.rate:
             self.loop.set_rate(settings.rate)
-        if settings == previous:
-            return
-        self.get_logger().info(self._describe(self.paused))
-        self._warn_on_frame_mismatch()
-        self._warn_on_slow_ticks_for_imus()
+        if settings != previous:
+            self.get_logger().info(self._describe(self.paused))
+            self._warn_on_frame_mismatch()
+            self._warn_on_slow_ticks_for_imus()
+        return replaced
 
     def plan_wiring(self, scene, settings):
         """Make what wiring ``scene`` takes that grows with its bodies: names, messages.

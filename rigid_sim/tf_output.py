@@ -6,11 +6,13 @@ tf2_msgs comes with every ROS install but has no wheel for a pip-only machine, w
 ``rigid_sim_build_interfaces`` builds it into the venv; it is imported optionally: without it
 the node logs once that tf is off, and how to add it, and publishes the same poses on its
 other topics. The transforms themselves are geometry_msgs/TransformStamped,
-built in :mod:`rigid_sim.conversions`; only their wrapping into a TFMessage lives here.
+built in :mod:`rigid_sim.conversions`; only their wrapping into a TFMessage, kept serialised
+(:mod:`rigid_sim.serialized`), lives here.
 """
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from rigid_sim.interface_build import HOW_TO_ADD
+from rigid_sim.serialized import SerializedPoses
 
 try:
     from tf2_msgs.msg import TFMessage
@@ -43,11 +45,21 @@ class TfOutput:
         self.dynamic = node.qos_overrides.create_publisher(TFMessage, '/tf', TF_QOS)
         self._static = node.qos_overrides.create_publisher(TFMessage, '/tf_static', STATIC_QOS)
 
-    def message(self, transforms):
-        """Wrap ``transforms`` (list of TransformStamped) in a TFMessage, or None without tf."""
-        return TFMessage(transforms=transforms) if self.available else None
+    def message(self, transforms, stamp):
+        """Return /tf's message of ``transforms``, serialised, or None without tf.
+
+        ``transforms`` is a list of TransformStamped whose headers all share ``stamp``
+        (a Time): :class:`~rigid_sim.serialized.SerializedPoses` writes their poses.
+        """
+        return serialized_transforms(transforms, stamp) if self.available else None
 
     def publish_static(self, transforms):
         """Publish ``transforms`` as the node's one /tf_static message, replacing the last."""
         if self.available:
             self._static.publish(TFMessage(transforms=transforms))
+
+
+def serialized_transforms(transforms, stamp):
+    """Return the TFMessage of ``transforms`` kept serialised (their headers share ``stamp``)."""
+    frames = [(t.transform.translation, t.transform.rotation) for t in transforms]
+    return SerializedPoses(TFMessage(transforms=transforms), frames, stamp, len(transforms))

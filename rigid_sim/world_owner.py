@@ -165,7 +165,7 @@ class WorldOwner:
         return True
 
     def swap(self, settings=None, scene=None, world=None, kept=None, integrator=None,
-             wiring=None):
+             wiring=None, frame=None):
         """Run what a job made from the next tick on: the one place any of it is replaced.
 
         Parameters
@@ -183,6 +183,9 @@ class WorldOwner:
         wiring : tuple
             With ``scene``: what the node's ``plan_wiring`` made for it in the worker, so
             that what is done here does not grow with the bodies but for array copies.
+        frame : tuple or None
+            For a change of frame names: the messages the outputs' ``frame_messages`` made
+            for them in the worker.
         """
         node = self._node
         previous = node.settings
@@ -200,4 +203,6 @@ class WorldOwner:
         if self.keeps_heap_frozen:
             self._freeze()
         self.generation += 1
-        node.apply(previous)   # the running light settings, onto the world that runs now
+        # The running light settings, onto the world that runs now; a new scene was wired
+        # with its frame names already.
+        _DISCARD.put(node.apply(previous, frame, rewired=world is not None))

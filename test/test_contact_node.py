@@ -4,6 +4,7 @@
 from visualization_msgs.msg import Marker, MarkerArray
 
 import ros_tools
+from rigid_sim.testing.simulation import PREPARATION_TIMEOUT
 
 SCENE = """
 effects:
@@ -57,8 +58,9 @@ def test_bodies_spawned_onto_the_ground_rest_there(rigid_sim):
     box.initial_pose.pose.position.x, box.initial_pose.pose.position.z = -1.0, 0.1
     ball = SpawnEntity.Request(resource_string='{name: pebble, shape: {type: sphere, '
                                'radius: 0.05}, mass: 0.2, pose: {position: [1.0, 0.0, 0.05]}}')
-    for request in (box, ball):
-        assert sim.call(SpawnEntity, 'spawn_entity', request).result.result == Result.RESULT_OK
+    for request in (box, ball):   # the first compiles the new world's kernels if not cached
+        answer = sim.call(SpawnEntity, 'spawn_entity', request, timeout=PREPARATION_TIMEOUT)
+        assert answer.result.result == Result.RESULT_OK
     sim.step(200)
     for name, height in (('crate', 0.1), ('pebble', 0.05)):
         state = sim.state(name)

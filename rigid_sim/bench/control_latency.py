@@ -12,8 +12,10 @@ whose kernels are not in the (fresh) cache, overload (1000 bodies at rate 1000, 
 one core can tick), a goal on the springs scene, a flood of goals (150 Hz), 1000 substeps
 a tick on 1000 bodies, dopri5 at tolerance 1e-12 on a rod spinning at 10 000 rad/s, a
 GetEntitiesStates of 20 000 bodies (refused: more states than ``max_answer_states``) and
-of 2000 (that bound's default), and a spawn into a scene of 5000 bodies (one
-SpawnEntity makes one entity; the swap carries all 5001). The node promises each
+of 2000 (that bound's default), a spawn into a scene of 5000 bodies (one
+SpawnEntity makes one entity; the swap carries all 5001), and another process hearing
+every topic of 1000 bodies (their pose, twist and odometry, the PoseArray, the markers and
+/tf; sampled for 10 s once the last body's pose has come). The node promises each
 answer within 100 ms and each stop, with status 0, within 0.5 s. The machine's load
 average over the run is given: other processes' load lengthens every number.
 """
@@ -65,6 +67,36 @@ print('sent', flush=True)
 rclpy.spin_until_future_complete(node, future, timeout_sec={ANSWER_TIMEOUT})
 print(len(future.result().states) if future.done() else 'no answer', flush=True)
 """
+# A client process that subscribes to every topic of the boxes_N scene's N bodies (pose,
+# twist and odometry each) and to ~/poses, ~/markers and /tf, says "heard" once the last
+# body's pose has come, and takes what comes until it is killed.
+HEARER = """
+import os, sys, rclpy
+from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
+from nav_msgs.msg import Odometry
+from visualization_msgs.msg import MarkerArray
+from tf2_msgs.msg import TFMessage
+from rigid_sim.tf_output import TF_QOS
+bodies = int(sys.argv[1])
+rclpy.init(domain_id=int(os.environ['ROS_DOMAIN_ID']))
+node = rclpy.create_node('hearer')
+heard = []
+subscriptions = [node.create_subscription(kind, f'/rigid_sim/box{i}/{topic}', heard.append,
+                                          1) for i in range(bodies) for kind, topic in
+                 ((PoseStamped, 'pose'), (TwistStamped, 'twist'), (Odometry, 'odom'))]
+for kind, topic, qos in ((PoseArray, '/rigid_sim/poses', 1),
+                         (MarkerArray, '/rigid_sim/markers', 1), (TFMessage, '/tf', TF_QOS)):
+    subscriptions.append(node.create_subscription(kind, topic, heard.append, qos))
+last = []
+node.create_subscription(PoseStamped, f'/rigid_sim/box{bodies - 1}/pose', last.append, 1)
+while not last:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print('heard', flush=True)
+while True:
+    rclpy.spin_once(node, timeout_sec=0.1)
+    heard.clear()
+"""
+HEARD_BODIES = 1000
 # A state: its name, its scene ('boxes': the N boxes the caller gives, a scene file's
 # name in the log directory, or a packaged one), node parameters, the work the client
 # starts and whether the kernel cache starts empty.
@@ -89,6 +121,9 @@ STATES = (
     State('GetEntitiesStates of 2000 bodies (max_answer_states, the default bound)',
           'boxes_2000', ['rate:=10.0'], 'states', False),
     State('spawn into 5000 bodies', 'boxes_5000', ['rate:=100.0'], 'spawn', False),
+    State(f'every topic of {HEARD_BODIES} bodies heard (pose, twist, odom, ~/poses, '
+          '~/markers, /tf)', f'boxes_{HEARD_BODIES}',
+          ['rate:=100.0', f'per_body_topics_limit:={HEARD_BODIES}'], 'hear', False),
 )
 
 
@@ -163,6 +198,11 @@ def _start_work(client, work, log_dir):
                                          stdout=subprocess.PIPE, text=True)
         client.caller.stdout.readline()   # sent
         return None
+    if work == 'hear':   # another process: taking 9000 topics' messages would slow this one
+        client.caller = subprocess.Popen([sys.executable, '-c', HEARER, str(HEARD_BODIES)],
+                                         stdout=subprocess.PIPE, text=True)
+        client.caller.stdout.readline()   # heard
+        return None
     if work == 'spawn':
         from simulation_interfaces.srv import SpawnEntity
         request = SpawnEntity.Request(
@@ -191,8 +231,10 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
             if work == 'step':
                 client.call(SetBool, 'pause', SetBool.Request(data=True))
             answer = _start_work(client, work, log_dir)
-            until = time.monotonic() + (FLOOD_SECONDS if work == 'flood' else ANSWER_TIMEOUT)
-            busy = {'flood': lambda: True, 'states': lambda: client.caller.poll() is None,
+            until = time.monotonic() + (FLOOD_SECONDS if work in ('flood', 'hear')
+                                        else ANSWER_TIMEOUT)
+            busy = {'flood': lambda: True, 'hear': lambda: True,
+                    'states': lambda: client.caller.poll() is None,
                     'spawn': lambda: not answer.done()}.get(work, lambda: False)
             asked = []   # SAMPLES at least, and while the work lasts
             while len(asked) < SAMPLES or (busy() and time.monotonic() < until):
@@ -214,9 +256,10 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
                 client.flood = None
             if getattr(client, 'caller', None) is not None:
                 client.caller.kill()   # it has its answer by now, or it never will
-                print(f'GetEntitiesStates answered with '
-                      f'{client.caller.stdout.read().strip() or "no answer yet"} states',
-                      file=sys.stderr)
+                if work == 'states':
+                    print(f'GetEntitiesStates answered with '
+                          f'{client.caller.stdout.read().strip() or "no answer yet"} states',
+                          file=sys.stderr)
                 client.caller.wait()
                 client.caller = None
             try:   # the node and anything it started
@@ -226,17 +269,18 @@ def measure_state(client, scene, parameters, work, fresh_cache, log_dir):
             node.wait()
 
 
-def measure(scenes, log_dir):
+def measure(scenes, log_dir, works=None):
     """``[(state, parameter call samples s, pause s, exit status, stop s)]`` per state.
 
     ``scenes``: scene name of :data:`STATES` -> file; a name not in it is used as it is.
+    ``works``: only the states of these works (None: all).
     """
     client = Client(int(os.environ['ROS_DOMAIN_ID']))
     try:
         return [(state.name, *measure_state(client, scenes.get(state.scene, state.scene),
                                             state.parameters, state.work, state.fresh_cache,
                                             log_dir))
-                for state in STATES]
+                for state in STATES if works is None or state.work in works]
     finally:
         client.close()
 

@@ -398,6 +398,9 @@ def add_arguments(parser):
                         help='skip the control-latency rows (not run with --quick either)')
     parser.add_argument('--control-only', action='store_true',
                         help='only the control-latency rows')
+    parser.add_argument('--control-works', nargs='+',
+                        choices=sorted({state.work for state in control_latency.STATES}),
+                        help='only the control-latency states of these works (default all)')
     parser.add_argument('--out', type=Path, help='Markdown file whose section is (re)written')
 
 
@@ -417,13 +420,13 @@ def main(args):
             starts = run_starts(chosen['start_sizes'], log_dir)
         if chosen.get('control', True) and args.control:
             scenes = {}
-            for n in (1000, 2000, 5000, 20_000):
+            for n in (1000, 2000, control_latency.HEARD_BODIES, 5000, 20_000):
                 scenes[f'boxes_{n}'] = str(Path(log_dir, f'boxes_{n}.yaml'))
                 Path(scenes[f'boxes_{n}']).write_text(scene_text(n))
             scenes['fast_rod'] = str(Path(log_dir, 'fast_rod.yaml'))
             Path(scenes['fast_rod']).write_text(control_latency.FAST_ROD)
             load = os.getloadavg()[0]
-            rows = control_latency.measure(scenes, log_dir)
+            rows = control_latency.measure(scenes, log_dir, args.control_works)
             write(args.out, CONTROL_SECTION, control_report(rows, (load, os.getloadavg()[0])))
     if not args.control_only:
         write(args.out, SECTION, report(results, seconds, starts))

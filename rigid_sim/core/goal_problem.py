@@ -235,11 +235,16 @@ class GoalProblem:
             if self.goal.axes == 'body':
                 torque = self.turn.T @ torque
             return np.concatenate((np.zeros(3), torque))
-        spin = turn / self.horizon
+        return self.spin_shift() @ (turn / self.horizon)
+
+    def spin_shift(self):
+        """Return (n, 3): the change of twist or angular unknowns a change of spin makes.
+
+        The centre of mass keeps its velocity: the origin's changes by -spin x (R c).
+        """
         if self.goal.unknowns == 'angular':
-            return spin
-        # The centre of mass keeps its velocity: the origin's changes by -spin x (R c).
-        return np.concatenate((self._lever_matrix @ spin, spin))
+            return np.eye(3)
+        return np.vstack((self._lever_matrix, np.eye(3)))
 
     def start_rows(self, values):
         """Start rows (K, 13) of the body from unknowns (K, n)."""

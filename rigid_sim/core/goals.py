@@ -9,13 +9,13 @@ goal's time. Newton's method (:mod:`~rigid_sim.core.goal_newton`) finds them fro
 made by the world's own integrator (:mod:`~rigid_sim.core.goal_flight`), its Jacobian by
 forward differences of copies of the body flown together in one compiled call. Of the
 solutions it finds (by continuation from the current motion, from the current motion
-corrected by the least move that closes its gap, on the branches a whole turn away and,
-where a flight is one exact step, by deflation of those found,
-:mod:`~rigid_sim.core.goal_deflation`; for a held wrench, on the lattice of whole turns of
-the end orientation, :mod:`~rigid_sim.core.goal_lattice`, and by Newton from starts filling
-the ellipsoid of nearer torques, :mod:`~rigid_sim.core.goal_torques`; for the others,
-across the fold beside the solution, :mod:`~rigid_sim.core.goal_fold`) it takes the
-nearest to the current motion by the impulse norm of
+corrected by the least move that closes its gap, on the branches a whole turn away; for a
+held wrench, on the lattice of whole turns of the end orientation,
+:mod:`~rigid_sim.core.goal_lattice`, and by Newton from starts filling the ellipsoid of
+nearer torques, :mod:`~rigid_sim.core.goal_torques`; for the others, across the fold
+beside the solution, :mod:`~rigid_sim.core.goal_fold`, and where a flight is one exact
+step, in the ball the nearest must lie in, :mod:`~rigid_sim.core.goal_ball`) it
+takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
 
@@ -32,8 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
-from rigid_sim.core.goal_deflation import Deflated
-from rigid_sim.core import goal_fold, goal_lattice, goal_torques, goal_twosided
+from rigid_sim.core import goal_ball, goal_fold, goal_lattice, goal_torques, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
@@ -69,11 +68,6 @@ CONTINUATION_STAGE = 0.25
 CONTINUED = ('twist', 'angular', 'wrench')
 SMALLEST_STAGE = 1.0 / 32.0
 SAME_START = 0.05
-# Deflated solves after the branch walk, where a flight is one exact step (twist and
-# angular unknowns of a free body: a flight costs microseconds, the solve's Python most):
-# from the current motion and from the corrected one, BRANCH_ITERATIONS each. On a flight
-# of many steps they cost 2.6 times the median solve (springs, T = 2 s) for 1 in 100.
-DEFLATED_STARTS = 2
 # The continuation's tries at most: stages never grow, so at most 1 / (SMALLEST_STAGE / 2)
 # succeed, and a stage halves at most log2(CONTINUATION_STAGE / SMALLEST_STAGE) + 1 times.
 CONTINUATION_TRIES = (int(2.0 / SMALLEST_STAGE)
@@ -88,22 +82,28 @@ TURN_STARTS = 6
 # differences and the curve it follows, then each start's, one for its first Jacobian
 # and one an iteration, twice over where a coarse flight comes first.
 FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1)
+# Flights of the search of the ball the nearest solution lies in
+# (:mod:`~rigid_sim.core.goal_ball`, where a flight is one exact step, after the fold's
+# starts; it replaced the two deflated solves, which found nothing it does not): its grid
+# and batched Newton in flights of goal_ball.CHUNK rows, then its polishing starts, one
+# flight of the goal's copies for the first Jacobian and one an iteration.
+BALL_FLIGHTS = goal_ball.GRID_FLIGHTS + goal_ball.POLISHED * (BRANCH_ITERATIONS + 1)
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
-# other starts (:meth:`GoalSolver._restarted`), the branches of whole turns and the
-# deflated solves; then a held wrench's walk on the lattice of whole turns and search of
-# its torque ellipsoid (their own bounds) or a twist's starts across its fold, never both.
-# The node decides by it whether a goal is solved in the tick.
+# other starts (:meth:`GoalSolver._restarted`) and the branches of whole turns; then a
+# held wrench's walk on the lattice of whole turns and search of its torque ellipsoid
+# (their own bounds) or a twist's starts across its fold and the search of the ball, never
+# both. The node decides by it whether a goal is solved in the tick.
 # The seeded draws where the two-sided meetings (:mod:`~rigid_sim.core.goal_twosided`) come
 # first: as many fewer as leave the meetings' flights within those of the draws left out.
 MET_RESTARTS = RESTARTS - int(np.ceil(goal_twosided.WORST_FLIGHTS / (2 * MAX_ITERATIONS)))
 WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                       + BRANCH_ITERATIONS * (CONTINUATION_TRIES + BRANCH_STARTS
-                                             + DEFLATED_STARTS + TURN_STARTS))
+                                             + TURN_STARTS))
                  + max(2 * MAX_ITERATIONS * RESTARTS,
                        2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
                  + max(goal_lattice.WORST_FLIGHTS + goal_torques.WORST_FLIGHTS,
-                       FOLD_FLIGHTS))
+                       FOLD_FLIGHTS + BALL_FLIGHTS))
 
 
 @dataclass(frozen=True)
@@ -316,12 +316,12 @@ class GoalSolver:
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
-        the deflated solves (a flight of one exact step) or a held wrench's lattice walk
-        and the search of its torque ellipsoid (a flight with a coarse grid,
-        :func:`~rigid_sim.core.goal_lattice.nearer`,
-        :func:`~rigid_sim.core.goal_torques.nearer`); last,
-        for twist, linear or angular unknowns, the starts across the fold beside the nearest
-        solution (:func:`~rigid_sim.core.goal_fold.nearer`).
+        a held wrench's lattice walk and the search of its torque ellipsoid (a flight with
+        a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`,
+        :func:`~rigid_sim.core.goal_torques.nearer`), or for twist, linear or angular
+        unknowns the starts across the fold beside the nearest solution
+        (:func:`~rigid_sim.core.goal_fold.nearer`) and, where a flight is one exact step, the
+        search of the ball the nearest must lie in (:func:`~rigid_sim.core.goal_ball.nearer`).
         """
         first = problem.first_iterate()
         found = []
@@ -363,14 +363,16 @@ class GoalSolver:
                                for shift in problem.whole_turns(newton.values, first)]
             seen.append(newton.values)
         problem.fly_on(problem.fine)
-        if problem.exact and problem.goal.unknowns in CONTINUED:
-            best = self._deflated(problem, best, (problem.current, first))
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
             best = goal_torques.nearer(problem, best, lambda copies: self.rollout(
                 problem.index, problem.goal.unknowns, problem.goal.axes, copies))
         if not problem.wrench:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
+        if goal_ball.applies(problem):
+            rollout = self.rollout(problem.index, problem.goal.unknowns, problem.goal.axes,
+                                   goal_ball.CHUNK)
+            best = goal_ball.nearer(problem, best, rollout, BRANCH_ITERATIONS)
         return best
 
     def _restarted(self, problem, first):
@@ -403,31 +405,6 @@ class GoalSolver:
             except NoConvergence as error:
                 last = error
         raise NoConvergence(_unconverged(tried, last)) from None
-
-    @staticmethod
-    def _deflated(problem, best, starts):
-        """Return the nearer of ``best`` and what Newton finds with ``best`` deflated away.
-
-        Two solutions of an asymmetric body may be near ties that no whole turn links;
-        Newton from ``starts`` on the equations less the solutions found
-        (:class:`~rigid_sim.core.goal_deflation.Deflated`) reaches the other.
-        """
-        roots, nearest = [best.values], problem.distance(best.values)
-        for start in starts:
-            newton = Newton(Deflated(problem, roots), start)
-            reach = BRANCH_SLACK * nearest   # abandoned beyond, as a branch is
-            try:
-                newton.converge(TOLERANCE, lambda u: problem.distance(u) <= reach,
-                                BRANCH_ITERATIONS)
-            except NoConvergence:
-                continue
-            roots.append(newton.values)
-            if problem.distance(newton.values) < nearest * (1.0 - SAME_DISTANCE):
-                # Its Jacobian is the deflated one: the true one comes with a fresh Newton.
-                best, nearest = Newton(problem, newton.values), problem.distance(newton.values)
-                best.converge(TOLERANCE)
-                best.iterations = newton.iterations
-        return best
 
     @staticmethod
     def _continued(problem):
