@@ -11,9 +11,10 @@ forward differences of copies of the body flown together in one compiled call. O
 solutions it finds (by continuation from the current motion, from the current motion
 corrected by the least move that closes its gap, on the branches a whole turn away; for a
 held wrench, on the lattice of whole turns of the end orientation,
-:mod:`~rigid_sim.core.goal_lattice`; for the others, across the fold beside the solution,
-:mod:`~rigid_sim.core.goal_fold`, and where a flight is one exact step, in the ball the
-nearest must lie in, :mod:`~rigid_sim.core.goal_ball`) it
+:mod:`~rigid_sim.core.goal_lattice`, and by Newton from starts filling the ellipsoid of
+nearer torques, :mod:`~rigid_sim.core.goal_torques`; for the others, across the fold
+beside the solution, :mod:`~rigid_sim.core.goal_fold`, and where a flight is one exact
+step, in the ball the nearest must lie in, :mod:`~rigid_sim.core.goal_ball`) it
 takes the nearest to the current motion by the impulse norm of
 :meth:`GoalProblem.distance <rigid_sim.core.goal_problem.GoalProblem.distance>`. The
 equations are :mod:`~rigid_sim.core.goal_problem`'s.
@@ -31,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
-from rigid_sim.core import goal_ball, goal_fold, goal_lattice, goal_twosided
+from rigid_sim.core import goal_ball, goal_fold, goal_lattice, goal_torques, goal_twosided
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
@@ -90,9 +91,9 @@ BALL_FLIGHTS = goal_ball.GRID_FLIGHTS + goal_ball.POLISHED * (BRANCH_ITERATIONS 
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`) and the branches of whole turns; then a
-# held wrench's walk on the lattice of whole turns (its own bound)
-# or a twist's starts across its fold and the search of the ball, never both. The node
-# decides by it whether a goal is solved in the tick.
+# held wrench's walk on the lattice of whole turns and search of its torque ellipsoid
+# (their own bounds) or a twist's starts across its fold and the search of the ball, never
+# both. The node decides by it whether a goal is solved in the tick.
 # The seeded draws where the two-sided meetings (:mod:`~rigid_sim.core.goal_twosided`) come
 # first: as many fewer as leave the meetings' flights within those of the draws left out.
 MET_RESTARTS = RESTARTS - int(np.ceil(goal_twosided.WORST_FLIGHTS / (2 * MAX_ITERATIONS)))
@@ -101,7 +102,8 @@ WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                                              + TURN_STARTS))
                  + max(2 * MAX_ITERATIONS * RESTARTS,
                        2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
-                 + max(goal_lattice.WORST_FLIGHTS, FOLD_FLIGHTS + BALL_FLIGHTS))
+                 + max(goal_lattice.WORST_FLIGHTS + goal_torques.WORST_FLIGHTS,
+                       FOLD_FLIGHTS + BALL_FLIGHTS))
 
 
 @dataclass(frozen=True)
@@ -314,8 +316,9 @@ class GoalSolver:
         are tried next, nearest start first, and the walk goes on
         from every nearer solution found, until no untried start is predicted within
         BRANCH_SLACK of the nearest distance or BRANCH_STARTS starts have been tried. Then
-        a held wrench's lattice walk (a flight with a coarse grid,
-        :func:`~rigid_sim.core.goal_lattice.nearer`), or for twist, linear or angular
+        a held wrench's lattice walk and the search of its torque ellipsoid (a flight with
+        a coarse grid, :func:`~rigid_sim.core.goal_lattice.nearer`,
+        :func:`~rigid_sim.core.goal_torques.nearer`), or for twist, linear or angular
         unknowns the starts across the fold beside the nearest solution
         (:func:`~rigid_sim.core.goal_fold.nearer`) and, where a flight is one exact step, the
         search of the ball the nearest must lie in (:func:`~rigid_sim.core.goal_ball.nearer`).
@@ -362,6 +365,8 @@ class GoalSolver:
         problem.fly_on(problem.fine)
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
+            best = goal_torques.nearer(problem, best, lambda copies: self.rollout(
+                problem.index, problem.goal.unknowns, problem.goal.axes, copies))
         if not problem.wrench:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         if goal_ball.applies(problem):
