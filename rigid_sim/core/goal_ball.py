@@ -79,7 +79,7 @@ def _ellipsoid(problem, best):
     quadratic = shift.T @ problem.metric @ shift
     linear = shift.T @ problem.metric @ change   # zero for a free body: the parts decouple
     centre = -np.linalg.solve(quadratic, linear)
-    lin = change @ problem.metric @ change - linear @ np.linalg.solve(quadratic, linear)
+    lin = change @ problem.metric @ change + linear @ centre
     return values, shift, centre, np.linalg.cholesky(quadratic), max(lin, 0.0)
 
 

@@ -28,6 +28,7 @@ changes.
 """
 import time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -363,16 +364,15 @@ class GoalSolver:
                                for shift in problem.whole_turns(newton.values, first)]
             seen.append(newton.values)
         problem.fly_on(problem.fine)
+        goal = problem.goal
+        rollouts = partial(self.rollout, problem.index, goal.unknowns, goal.axes)  # (copies)
         if problem.wrench and problem.coarse is not None:
             best = goal_lattice.nearer(problem, best)
-            best = goal_torques.nearer(problem, best, lambda copies: self.rollout(
-                problem.index, problem.goal.unknowns, problem.goal.axes, copies))
+            best = goal_torques.nearer(problem, best, rollouts)
         if not problem.wrench:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         if goal_ball.applies(problem):
-            rollout = self.rollout(problem.index, problem.goal.unknowns, problem.goal.axes,
-                                   goal_ball.CHUNK)
-            best = goal_ball.nearer(problem, best, rollout, BRANCH_ITERATIONS)
+            best = goal_ball.nearer(problem, best, rollouts(goal_ball.CHUNK), BRANCH_ITERATIONS)
         return best
 
     def _restarted(self, problem, first):
