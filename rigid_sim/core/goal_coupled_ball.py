@@ -168,8 +168,8 @@ def nearer(problem, best, rollouts, iterations):
     ends, sizes, jacobians = newton_all(residual_at, (starts[row[minima]] - problem.current)
                                         @ lower, spacing, ITERATIONS, SETTLED)
     reach = np.einsum('ij,ij->i', ends, ends)
-    known = (best.values - problem.current) @ lower
-    apart = np.linalg.norm(ends - known, axis=1) > SAME * nearest
+    taken = (best.values - problem.current) @ lower
+    apart = np.linalg.norm(ends - taken, axis=1) > SAME * nearest   # not the solution again
     roots = np.flatnonzero((sizes < ROOT) & (reach < nearest ** 2) & apart)
     roots = roots[np.argsort(reach[roots], kind='stable')][:POLISHED]
     problem.fly_on(problem.fine)
