@@ -6,6 +6,7 @@ A user node in the test's context publishes the goal and reads ``~/<body>/pose``
 on ``~/<body>/goal_path`` and the outcome on /diagnostics, all through the middleware.
 """
 import itertools
+import re
 import time
 
 import numpy as np
@@ -109,17 +110,24 @@ def test_a_goal_stamped_zero_is_due_goal_horizon_seconds_later(rigid_sim):
     assert physics_cases.rotation_error(user.pose_at(0.53)[1], TURN.as_quat()) < 1e-6
 
 
-def test_a_refused_goal_says_why_and_changes_nothing(rigid_sim):
-    """Paused, a tick applies inputs without advancing: the refused goal leaves y as it was."""
+@pytest.mark.parametrize('frame, reason', [
+    ('map', "unknown frame_id 'map'"),
+    ('x' * 100_000, r'a PoseStamped of 100\d{3} bytes serialised, above the 65536 .* not read'),
+])
+def test_a_refused_goal_says_why_and_changes_nothing(rigid_sim, frame, reason):
+    """Paused, a tick applies inputs without advancing: the refused goal leaves y as it was.
+
+    A goal far longer than any the node can use is refused unread, and so reported.
+    """
     sim = rigid_sim(yaml=SCENE, time_step=DT, start_paused=True)
     user = User(sim)
     before = sim.node.world.y.copy()
-    user.goal(at=1.0, frame='map')
+    user.goal(at=1.0, frame=frame)
     sim.step(1)
     assert np.array_equal(sim.node.world.y, before)
     refused = user.statuses[-1]
-    assert refused.level == DiagnosticStatus.WARN
-    assert "unknown frame_id 'map'" in refused.message
+    assert refused.level == DiagnosticStatus.WARN and sim.node.goals.refused == 1
+    assert re.search(reason, refused.message)
 
 
 def test_the_kit_solves_a_goal_and_the_body_gets_there(rigid_sim):
