@@ -87,12 +87,17 @@ def main(args=None):
     stopper = _Stopper()
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)
+    from rigid_sim.dds_profile import use_shipped_profile
+    choice = use_shipped_profile()   # before rclpy.init, which makes the DDS participant
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
     from rigid_sim import spin
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        if choice.note is not None:
+            logger = rclpy.logging.get_logger('rigid_sim')
+            (logger.info if choice.profile is not None else logger.warning)(choice.note)
         return spin.run(stopper)
     finally:
         ignore_stop_signals()   # a second Ctrl-C must not break the clean-up
