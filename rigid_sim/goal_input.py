@@ -41,7 +41,7 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
 
-from rigid_sim import conversions, on_demand
+from rigid_sim import bounded_input, conversions, on_demand
 from rigid_sim.core.goal_flight import snapshot
 from rigid_sim.core.goals import Goal, GoalSolver, WORST_FLIGHTS
 from rigid_sim.core.text import shown
@@ -109,16 +109,18 @@ class GoalInput:
 
     def _subscribe(self, name):
         index = self._awaited.pop(name)
-        self._subscriptions.append(self._node.create_subscription(
-            PoseStamped, name, lambda message, index=index: self._store(index, message),
-            QUEUE_DEPTH))
+        self._subscriptions.append(bounded_input.subscribe(
+            self._node, PoseStamped, name,
+            lambda message, index=index: self._store(index, message), QUEUE_DEPTH))
 
     def topics(self):
         """Fully qualified goal topics, subscribed to or awaited."""
         return {s.topic_name for s in self._subscriptions} | set(self._awaited)
 
     def _store(self, index, message):
-        self._inbox[index] = message   # the newest goal of a body replaces an older one
+        # The newest goal of a body replaces an older one; an Oversized one is refused at
+        # the tick, as any other goal is: one report a tick, however many arrive.
+        self._inbox[index] = message
 
     def apply(self, world, scene, settings):
         """At a tick: apply finished solves, start the goals received since the last one."""
@@ -174,6 +176,9 @@ class GoalInput:
         return Goal(index, position, orientation, now + ticks * tick, **wanted)
 
     def _start(self, index, message, settings):
+        if isinstance(message, bounded_input.Oversized):
+            self._report_refusal(index, message)
+            return
         try:
             goal = self.goal(index, message, settings)
             if self._in_tick(goal, settings):

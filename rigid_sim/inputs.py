@@ -23,7 +23,7 @@ import math
 from geometry_msgs.msg import PoseStamped, TwistStamped, WrenchStamped
 from rclpy.clock import Clock, ClockType
 
-from rigid_sim import conversions, on_demand
+from rigid_sim import bounded_input, conversions, on_demand
 from rigid_sim.core.body_state import with_pose, with_twist
 from rigid_sim.core.scene import wrench_target
 from rigid_sim.core.text import shown
@@ -156,8 +156,8 @@ class BodyInputs:
         def take(message):
             self._store(topic, at[0], message)
             self._drain(made[0], topic, at[0])
-        made.append(self._node.create_subscription(kind, f'~/{name}/{topic}', take,
-                                                   QUEUE_DEPTH))
+        made.append(bounded_input.subscribe(self._node, kind, f'~/{name}/{topic}', take,
+                                            QUEUE_DEPTH))
         self._subscribed[(topic, name)] = (made[0], at)
         return made[0]
 
@@ -169,10 +169,13 @@ class BodyInputs:
                                                          subscription.raw)
                 if taken is None:
                     return
-                self._store(topic, index, taken[0])
+                self._store(topic, index, bounded_input.read(taken[0], subscription.msg_type))
 
     def _store(self, topic, index, message):
         self.received += 1
+        if isinstance(message, bounded_input.Oversized):
+            self.refusals.add(self._names[index], topic, message, self._node.get_logger())
+            return
         key = (topic, index, message.header.frame_id)
         if self._inbox.pop(key, None) is not None:
             self.refusals.superseded[self._names[index]] += 1

@@ -2,9 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Entry point of the ``rigid_sim_node`` executable.
 
-SIGINT and SIGTERM stop the node cleanly (exit status 0, no traceback) at any moment. rclpy's
-own handlers are not installed: they shut the context down from the signal while a tick may
-still be publishing, which then raises ("publisher's context is invalid"). Here a signal
+SIGINT, SIGTERM and SIGHUP (a closed terminal) stop the node cleanly (exit status 0, no
+traceback) at any moment. rclpy's own handlers are not installed: they shut the context
+down from the signal while a tick may still be publishing, which then raises ("publisher's
+context is invalid"). Here a signal
 while the node is built (its scene loaded, its kernels compiled or loaded from numba's
 cache) destroys the node and ends the process at once: nothing else it holds needs an
 orderly release, and an exception raised out of that code would unwind through llvmlite's
@@ -28,7 +29,9 @@ import time
 
 # Only the standard library above: the handlers are installed before the heavy imports
 # (rclpy, numba, scipy: about a second), so a signal in the first milliseconds is not lost.
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+# SIGHUP: the terminal closed. Its default ends the process at once, mid-send, which can
+# leave another process's Fast DDS shared-memory port locked (docs/ros_notes.md, "Shutdown").
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class _Stopper:
@@ -68,31 +71,39 @@ class _Stopper:
 
 
 def ignore_stop_signals():
-    """Ignore SIGINT and SIGTERM from now on (the node is on its way out)."""
+    """Ignore the stop signals from now on (the node is on its way out)."""
     for number in STOP_SIGNALS:
         signal.signal(number, signal.SIG_IGN)
 
 
 def _end_process(status):
-    sys.stdout.flush()
-    sys.stderr.flush()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except OSError:   # a terminal that closed (SIGHUP) takes no more output
+            pass
     os._exit(status)
 
 
 def main(args=None):
-    """Run the node until SIGINT or SIGTERM; return 0, or 1 when the start is refused.
+    """Run the node until SIGINT, SIGTERM or SIGHUP; return 0, or 1 when the start is refused.
 
     A stop signal before the node spins ends the process at once, with status 0.
     """
     stopper = _Stopper()
     for number in STOP_SIGNALS:
         signal.signal(number, stopper)
+    from rigid_sim.dds_profile import use_shipped_profile
+    choice = use_shipped_profile()   # before rclpy.init, which makes the DDS participant
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
     from rigid_sim import spin
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        if choice.note is not None:
+            logger = rclpy.logging.get_logger('rigid_sim')
+            (logger.info if choice.profile is not None else logger.warning)(choice.note)
         return spin.run(stopper)
     finally:
         ignore_stop_signals()   # a second Ctrl-C must not break the clean-up

@@ -1,6 +1,6 @@
 # Copyright 2026 rigid_sim maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""SIGINT and SIGTERM stop a node process cleanly, whatever it is doing.
+"""SIGINT, SIGTERM and SIGHUP stop a node process cleanly, whatever it is doing.
 
 Twenty node processes at every kind of tick rate (1 kHz, 100 Hz, as fast as possible, one
 tick per 1000 s) and paused, each signalled once at a different moment after it reported
@@ -13,6 +13,8 @@ timed tests.
 """
 import json
 import os
+import pty
+import select
 import signal
 import subprocess
 import sys
@@ -29,8 +31,8 @@ START_TIMEOUT = 600.0  # s: twenty nodes importing and discovering on a loaded 2
 EXIT_TIMEOUT = 120.0   # s: a liveness bound, far above the exit times the benchmark shows
 RATES = (['-p', 'rate:=1000.0'], ['-p', 'rate:=100.0'], ['-p', 'rate:=0.0'],
          ['-p', 'rate:=0.001', '-p', 'time_step:=0.01'], ['-p', 'start_paused:=true'])
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
-RUNS = [(RATES[i % len(RATES)], SIGNALS[i % 2], 0.01 * (i % 7)) for i in range(20)]
+SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)   # SIGHUP: the terminal closed
+RUNS = [(RATES[i % len(RATES)], SIGNALS[i % len(SIGNALS)], 0.01 * (i % 7)) for i in range(20)]
 MARKS = ('Traceback', 'RCLError', 'terminate called', 'context is invalid', 'rror')
 
 
@@ -115,3 +117,32 @@ def test_a_destroyed_node_leaves_no_dds_participant_running(ros_context):
     executor.shutdown(timeout_sec=0)
     node.destroy_node()
     assert _participant_threads() == before
+
+
+def test_a_closed_terminal_ends_the_node_with_status_zero():
+    """The terminal the node runs in closes (its SIGHUP): the node ends as on SIGINT.
+
+    SIGHUP's default ended the process at once (killed by signal 1), its DDS threads
+    mid-send; the closed terminal then refuses the output of the node's last words.
+    """
+    pid, terminal = pty.fork()
+    if pid == 0:   # the child: the executable, its terminal the pseudo-terminal
+        os.execv(str(EXECUTABLE), [str(EXECUTABLE), '--ros-args', '-r',
+                                   f'__ns:=/shutdown{os.getppid()}/terminal'])
+    ended = (0, 0)   # (pid, status) once reaped
+    try:
+        output, deadline = b'', time.monotonic() + START_TIMEOUT
+        while b'ready' not in output:
+            assert time.monotonic() < deadline, output.decode(errors='replace')
+            if select.select([terminal], [], [], 1.0)[0]:
+                output += os.read(terminal, 65536)
+        os.close(terminal)
+        deadline = time.monotonic() + EXIT_TIMEOUT
+        while (ended := os.waitpid(pid, os.WNOHANG))[0] == 0:
+            assert time.monotonic() < deadline, 'the node did not end'
+            time.sleep(0.01)
+        assert os.waitstatus_to_exitcode(ended[1]) == 0
+    finally:
+        if ended[0] == 0:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)

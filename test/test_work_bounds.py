@@ -15,6 +15,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rigid_sim import goal_input, tick_loop
 from rigid_sim.core.integrators.adaptive import MAX_INTERNAL_STEPS
 from rigid_sim.core.scene import build_world, load_scene
+from rigid_sim.core.text import SHOWN_CHARACTERS, shown
 from rigid_sim.tick_loop import StepJob, TickLoop
 from ros_tools import record, spin_until
 from test_goal_node import DT, SCENE, User, values
@@ -25,6 +26,22 @@ SUBSTEPS = 40
 # takes over 3000 internal steps in 0.01 s.
 FAST_ROD = rod.ROD.replace('[0.0, 100.0, 0.1]', '[0.0, 10000.0, 10.0]')
 TIMEOUT = 120.0   # s: a liveness bound for the worker thread on a loaded machine
+
+
+class QuotedWhole(str):
+    """Outside text that fails the test if a refusal quotes it whole (repr of all of it)."""
+
+    def __repr__(self):
+        raise AssertionError(f'repr of all {len(self)} characters')
+
+
+def test_a_refusal_quotes_only_the_ends_of_a_long_text():
+    """A 300 MB frame_id's repr took 1.1 s: only its ends are quoted, then its length."""
+    text = QuotedWhole('a' + '\n' * 1_000_000 + 'z')
+    quoted = shown(text)
+    assert len(quoted) < SHOWN_CHARACTERS + 40
+    assert quoted.startswith("'a\\n\\n") and quoted.endswith("\\n\\nz'")
+    assert '...(1000002 characters)...' in quoted
 
 
 def test_a_tick_told_its_slice_is_over_stops_after_one_step_and_goes_on_later(rigid_sim):
