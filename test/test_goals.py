@@ -17,10 +17,11 @@ from rigid_sim.core.body_state import body_frame_state, with_twist
 from rigid_sim.core.effects.gravity import Gravity
 from rigid_sim.core.goal_flight import Rollout
 from rigid_sim.core.goal_newton import Newton
-from rigid_sim.core import goal_ball
+from rigid_sim.core import goal_ball, goal_coupled_ball
 from rigid_sim.core.goal_problem import TOLERANCE, GoalProblem
 from rigid_sim.core.goal_twosided import TwoSided
-from rigid_sim.core.goals import (ACCEPTED, BALL_FLIGHTS, BRANCH_ITERATIONS, Goal, GoalRefused,
+from rigid_sim.core.goals import (ACCEPTED, BALL_FLIGHTS, BRANCH_ITERATIONS, COUPLED_FLIGHTS, Goal,
+                                  GoalRefused,
                                   GoalSolver, MAX_SPEED, MAX_SPIN, WORST_FLIGHTS)
 from rigid_sim.core.scene import SceneError, build_world, parse_scene
 
@@ -620,6 +621,80 @@ def test_a_goal_beyond_the_speed_limit_is_refused_with_the_speed_it_needs():
     assert (scene.bodies[0].goal['max_speed'], scene.bodies[0].goal['max_spin']) == (3.0, 4.0)
     with pytest.raises(SceneError, match=r'bodies\[0\]\.goal\.max_speed'):
         parse_scene({'bodies': [dict(BOX, goal={'max_speed': -1.0})]})
+
+
+# Twists of the (1, 2, 3) rad/s box on the damped spring (the bench's `springs` targets,
+# T = 2 s, dt 1e-3) where the solver before the search of the coupled ball took a solution
+# 1.108 ('a') and 1.116 ('b') times as far as the known twist, spinning 5 and 4 rad/s away
+# from it; 'b' has a solution nearer than the known one.
+SPRING_TWISTS = {
+    'a': [0.477711, -0.102067, -1.873707, 1.278651, 2.057438, 2.815223],
+    'b': [0.158263, 0.318596, 0.82563, 1.185911, 2.236259, 3.84407],
+}
+
+
+def spring_goal(case):
+    """Return the goal the oracle flies SPRING_TWISTS[case] to in 2 s, and that twist."""
+    twist = np.array(SPRING_TWISTS[case])
+    effects = {'springs': [SPRING]}
+    return Goal(0, *oracle_pose(effects, twist[:3], twist[3:], T), T), twist
+
+
+@pytest.mark.parametrize('case', sorted(SPRING_TWISTS))
+def test_a_spring_target_is_reached_by_no_larger_a_change_than_the_oracle_flew(case):
+    """T = 2 s on the damped spring: the oracle's target, by a change no larger than its own.
+
+    The world's flight with the solution ends at the target (1e-9); the world's discrete
+    flight differs from the oracle's by its step's error (~1e-6 at dt 1e-3 over 2 s), so
+    the known twist solves the world's goal to about that, and the solution's change from
+    the current motion may exceed the known's by no more than 1e-5 (as ORACLE_CASES).
+    """
+    goal, twist = spring_goal(case)
+    base = np.array([0.1, 0.0, 0.0, 1.0, 2.0, 3.0])
+    solution = GoalSolver(scene_world({'springs': [SPRING]}), 1e-3).solve(goal)
+    assert max(solution.position_error, solution.orientation_error) <= ACCEPTED
+    solved = np.concatenate((solution.linear_velocity, solution.angular_velocity))
+    assert change_size(solved - base) <= change_size(twist - base) + 1e-5
+
+
+def test_the_search_of_the_coupled_ball_is_never_farther_and_stays_within_its_bound(
+        monkeypatch):
+    """From a farther spring solution, the search returns one no farther, within its bound.
+
+    The solve without the search takes a solution 1.108 times as far as the known twist
+    (SPRING_TWISTS 'a'); the search from it returns a solution no farther than it nor
+    (to 1e-5) than the known, in at most CALLS calls of the copies on the coarse flight
+    and, each call counted as CALL_FLIGHTS flights and each polishing flight as one, at
+    most COUPLED_FLIGHTS.
+    """
+    goal, twist = spring_goal('a')
+    base = np.array([0.1, 0.0, 0.0, 1.0, 2.0, 3.0])
+    solver = GoalSolver(scene_world({'springs': [SPRING]}), 1e-3)
+    with monkeypatch.context() as patched:
+        patched.setattr(goal_coupled_ball, 'applies', lambda problem: False)
+        farther = solver.solve(goal)
+    problem = GoalProblem(solver, goal, goal.position, goal.orientation)
+    problem.fly_on(problem.fine)
+    start = Newton(problem, farther.values)
+    start.converge(TOLERANCE)
+    assert change_size(start.values - base) > 1.1 * change_size(twist - base)
+    calls, flights = [], []
+    fly = Rollout.fly
+
+    def counted(rollout, *args, **kwargs):
+        batched = rollout.copies.copies in goal_coupled_ball.ROWS
+        calls.append(batched)
+        flights.append(goal_coupled_ball.CALL_FLIGHTS if batched else 1)
+        return fly(rollout, *args, **kwargs)
+    monkeypatch.setattr(Rollout, 'fly', counted)
+    found = goal_coupled_ball.nearer(
+        problem, start, lambda copies: solver.rollout(0, 'twist', 'world', copies),
+        BRANCH_ITERATIONS)
+    assert sum(calls) <= goal_coupled_ball.CALLS
+    assert sum(flights) <= COUPLED_FLIGHTS
+    assert problem.close_enough(problem.residuals(found.values[None])[0])
+    assert problem.distance(found.values) <= problem.distance(start.values)
+    assert change_size(found.values - base) <= change_size(twist - base) + 1e-5
 
 
 def test_a_ten_second_target_the_oracle_flew_to_on_the_damped_spring_is_reached():

@@ -7,9 +7,11 @@ Once a solution at distance ``d`` is known, every nearer one lies in the ball
 force) translation and rotation decouple: the centre of mass moves linearly in its own
 velocity, so that velocity is unique at every solution, and with it fixed the metric of
 "nearest" is ``d^2 = lin^2 + dw . Q dw`` (``Q`` the world inertia for twist unknowns, see
-:func:`_ellipsoid`). The search is over the three angular unknowns, in the ellipsoid
-``dw . Q dw < d^2 - lin^2``, which whitened (``z = C^T dw``, ``Q = C C^T``) is a ball of
-radius ``r``.
+:func:`~rigid_sim.core.goal_grid.ellipsoid`). The search is over the three angular
+unknowns, in the ellipsoid ``dw . Q dw < d^2 - lin^2``, which whitened (``z = C^T dw``,
+``Q = C C^T``) is a ball of radius ``r``. The grid, its minima and the batched Newton are
+:mod:`~rigid_sim.core.goal_grid`'s, shared with the search where a spring couples the
+parts (:mod:`~rigid_sim.core.goal_coupled_ball`).
 
 On the 7 targets of the bench's ``tumbling_long`` (T = 10 s) whose solution was farther
 than the known change, the nearer solutions lay 1.0-3.2 rad/s from the one found, not a
@@ -29,6 +31,7 @@ plain fold pair nor a whole turn away; no start reached them. The search:
 """
 import numpy as np
 
+from rigid_sim.core.goal_grid import ellipsoid, grid, nearest_minima, newton_all
 from rigid_sim.core.goal_newton import Newton, NoConvergence
 from rigid_sim.core.goal_problem import SAME_DISTANCE, TOLERANCE
 
@@ -45,7 +48,6 @@ SPACING = 1.0
 GRID_POINTS = 16384
 MINIMA = 512           # local minima Newton starts from, at most: the nearest
 ITERATIONS = 8         # of the batched Newton on the orientation
-DIFFERENCE = 1e-6      # its forward differences' step in z (sqrt(kg) m, ~1e-5 rad/s)
 ROOT = 1e-3            # rad: a minimum's Newton that ends nearer the goal is polished
 SETTLED = 1e-9         # rad: the batched Newton stops once every minimum's is this near
 POLISHED = 4           # polishing starts, at most, each of `iterations` of the goal's Newton
@@ -59,58 +61,6 @@ GRID_FLIGHTS = -(-GRID_POINTS // CHUNK) + (ITERATIONS + 1) * -(-4 * MINIMA // CH
 def applies(problem):
     """Whether the search runs: a flight of one exact step, twist or angular unknowns."""
     return problem.exact and problem.goal.unknowns in ('twist', 'angular')
-
-
-def _ellipsoid(problem, best):
-    """Return (values, shift, centre dw_c (3,), C (3, 3), lin^2): the ball's coordinates.
-
-    ``values(dw)`` (K, 3) -> (K, n) unknowns with the spin ``w_now + dw`` and the centre of
-    mass's velocity of ``best``, ``shift`` (n, 3) their change per unit of ``dw``;
-    ``distance(values(dw))^2 = lin^2 + |C^T (dw - dw_c)|^2``.
-    """
-    now = problem.current[-3:]
-    shift = problem.spin_shift()   # (n, 3), the centre of mass's velocity kept
-    base = best + shift @ (now - best[-3:])   # best's centre of mass velocity, spin now
-
-    def values(spins):
-        return base + spins @ shift.T
-
-    change = base - problem.current
-    quadratic = shift.T @ problem.metric @ shift
-    linear = shift.T @ problem.metric @ change   # zero for a free body: the parts decouple
-    centre = -np.linalg.solve(quadratic, linear)
-    lin = change @ problem.metric @ change + linear @ centre
-    return values, shift, centre, np.linalg.cholesky(quadratic), max(lin, 0.0)
-
-
-def _grid(radius, spacing):
-    """Return grid points (P, 3) within ``radius``, nearest first, their (side,) * 3 index.
-
-    At most GRID_POINTS: the ball is cut to the radius that holds about that many.
-    """
-    held = spacing * (0.75 * GRID_POINTS / np.pi) ** (1.0 / 3.0)
-    side = int(np.ceil(min(radius, held) / spacing))
-    axis = np.arange(-side, side + 1) * spacing
-    points = np.stack(np.meshgrid(axis, axis, axis, indexing='ij'), -1).reshape(-1, 3)
-    squares = np.einsum('ij,ij->i', points, points)
-    inside = np.flatnonzero(squares < radius * radius)
-    inside = inside[np.argsort(squares[inside], kind='stable')][:GRID_POINTS]
-    return points, inside, (2 * side + 1,) * 3
-
-
-def _local_minima(angles, shape):
-    """Return the flat indices where ``angles`` (inf outside) is no larger than 26 neighbours."""
-    cube = angles.reshape(shape)
-    padded = np.pad(cube, 1, constant_values=np.inf)
-    lowest = np.isfinite(cube)
-    for dx in (-1, 0, 1):
-        for dy in (-1, 0, 1):
-            for dz in (-1, 0, 1):
-                if dx or dy or dz:
-                    lowest &= cube <= padded[1 + dx:1 + dx + shape[0],
-                                             1 + dy:1 + dy + shape[1],
-                                             1 + dz:1 + dz + shape[2]]
-    return np.flatnonzero(lowest.ravel())
 
 
 class _Orientation:
@@ -135,48 +85,13 @@ class _Orientation:
         return self.problem.residual_of(np.concatenate(finals)[:count])[:, -3:]
 
 
-def _newton_all(orientation, z, step):
-    """Trust-region Newton on the orientation from every row of ``z`` at once.
-
-    Return the ends (M, 3) and their residual angles (M,). Each iteration flies every
-    trial with its three differences (one flight of 4 M rows): a trial that lowers the
-    angle is taken and its trust radius doubled, else the radius is quartered. It stops
-    early once every angle is within SETTLED.
-    """
-    count = len(z)
-    offsets = np.vstack((np.zeros(3), DIFFERENCE * np.eye(3)))
-    radius = np.full(count, 0.5 * step)   # doubled as the first flight is taken
-    angles, residual, jacobian = np.full(count, np.inf), None, None
-    trial = z
-    for _ in range(ITERATIONS + 1):
-        flown = orientation((trial[:, None, :] + offsets).reshape(-1, 3)).reshape(count, 4, 3)
-        tried = np.linalg.norm(flown[:, 0], axis=1)
-        taken = tried < angles   # NaN (a failed flight) is never taken
-        z = np.where(taken[:, None], trial, z)
-        angles = np.where(taken, tried, angles)
-        radius = np.where(taken, 2.0 * radius, 0.25 * radius)
-        if residual is None:
-            residual, jacobian = flown[:, 0], None
-        residual = np.where(taken[:, None], flown[:, 0], residual)
-        fresh = np.nan_to_num((flown[:, 1:] - flown[:, :1]).transpose(0, 2, 1) / DIFFERENCE)
-        jacobian = fresh if jacobian is None else np.where(taken[:, None, None], fresh,
-                                                           jacobian)
-        if np.all(angles <= SETTLED):   # at T = 2 s mostly one minimum, the solution known
-            break
-        change = -np.einsum('kij,kj->ki', np.linalg.pinv(jacobian), np.nan_to_num(residual))
-        length = np.linalg.norm(change, axis=1)
-        change *= np.minimum(1.0, radius / np.maximum(length, 1e-300))[:, None]
-        trial = z + change
-    return z, angles
-
-
 def nearer(problem, best, rollout, iterations):
     """Return ``best`` (a converged Newton) or the nearest solution the search finds.
 
     ``rollout``: a Rollout of CHUNK copies of the goal's body. Each polishing start gets
     ``iterations`` of the goal's Newton and is abandoned once an iterate leaves the ball.
     """
-    values, shift, centre, whitening, lin = _ellipsoid(problem, best.values)
+    values, shift, centre, whitening, lin = ellipsoid(problem, best.values)
     nearest = problem.distance(best.values)
     radius = np.sqrt(max(nearest ** 2 - lin, 0.0))
     # The end orientation's rows are the residual's last three, whatever the unknowns.
@@ -186,16 +101,14 @@ def nearer(problem, best, rollout, iterations):
         return best
     spacing = SPACING / sigma
     orientation = _Orientation(problem, rollout, values, centre, whitening)
-    points, inside, shape = _grid(radius, spacing)
+    points, inside, shape = grid(radius, spacing, GRID_POINTS)
     angles = np.full(len(points), np.inf)
     angles[inside] = np.linalg.norm(orientation(points[inside]), axis=1)
     angles[np.isnan(angles)] = np.inf
-    minima = _local_minima(angles, shape)
-    minima = minima[np.argsort(np.einsum('ij,ij->i', points[minima], points[minima]),
-                               kind='stable')][:MINIMA]
+    minima = nearest_minima(points, angles, shape, MINIMA)
     if not minima.size:
         return best
-    ends, angles = _newton_all(orientation, points[minima], spacing)
+    ends, angles, _ = newton_all(orientation, points[minima], spacing, ITERATIONS, SETTLED)
     reach = np.einsum('ij,ij->i', ends, ends)
     roots = np.flatnonzero((angles < ROOT) & (reach < radius ** 2))
     roots = roots[np.argsort(reach[roots], kind='stable')][:POLISHED]

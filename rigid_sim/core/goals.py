@@ -33,7 +33,8 @@ from functools import partial
 import numpy as np
 
 from rigid_sim.core.body_state import unit_quaternion, with_twist
-from rigid_sim.core import goal_ball, goal_fold, goal_lattice, goal_torques, goal_twosided
+from rigid_sim.core import (goal_ball, goal_coupled_ball, goal_fold, goal_lattice, goal_torques,
+                            goal_twosided)
 from rigid_sim.core.goal_flight import GOAL_KEY, GoalRefused, Rollout
 from rigid_sim.core.goal_newton import MAX_ITERATIONS, LeftTheBound, Newton, NoConvergence
 from rigid_sim.core.goal_problem import (COARSE_TOLERANCE, SAME_DISTANCE, TOLERANCE, UNKNOWNS,
@@ -89,6 +90,13 @@ FOLD_FLIGHTS = goal_fold.FLIGHTS + 2 * goal_fold.STARTS * (BRANCH_ITERATIONS + 1
 # and batched Newton in flights of goal_ball.CHUNK rows, then its polishing starts, one
 # flight of the goal's copies for the first Jacobian and one an iteration.
 BALL_FLIGHTS = goal_ball.GRID_FLIGHTS + goal_ball.POLISHED * (BRANCH_ITERATIONS + 1)
+# Flights of the search of the ball where a spring couples the parts
+# (:mod:`~rigid_sim.core.goal_coupled_ball`, twist unknowns on a flight with a coarse grid,
+# after the fold's starts; never with the other ball's): its calls on the coarse flight,
+# each counted as the flights of the goal's copies on the fine flight its work makes, then
+# its polishing starts on the fine flight.
+COUPLED_FLIGHTS = (goal_coupled_ball.GRID_FLIGHTS
+                   + goal_coupled_ball.POLISHED * (BRANCH_ITERATIONS + 1))
 # Flights a solve from no start may fly at worst, each iteration one flight, twice over
 # where a coarse flight comes first: the continuation, the corrected current motion, the
 # other starts (:meth:`GoalSolver._restarted`) and the branches of whole turns; then a
@@ -104,7 +112,7 @@ WORST_FLIGHTS = (2 * (MAX_ITERATIONS * 3
                  + max(2 * MAX_ITERATIONS * RESTARTS,
                        2 * MAX_ITERATIONS * MET_RESTARTS + goal_twosided.WORST_FLIGHTS)
                  + max(goal_lattice.WORST_FLIGHTS + goal_torques.WORST_FLIGHTS,
-                       FOLD_FLIGHTS + BALL_FLIGHTS))
+                       FOLD_FLIGHTS + max(BALL_FLIGHTS, COUPLED_FLIGHTS)))
 
 
 @dataclass(frozen=True)
@@ -373,6 +381,8 @@ class GoalSolver:
             best = goal_fold.nearer(problem, best, BRANCH_SLACK, BRANCH_ITERATIONS)
         if goal_ball.applies(problem):
             best = goal_ball.nearer(problem, best, rollouts(goal_ball.CHUNK), BRANCH_ITERATIONS)
+        elif goal_coupled_ball.applies(problem):
+            best = goal_coupled_ball.nearer(problem, best, rollouts, BRANCH_ITERATIONS)
         return best
 
     def _restarted(self, problem, first):
