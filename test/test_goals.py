@@ -474,6 +474,21 @@ def test_a_ten_second_tumble_takes_a_solution_no_start_reaches_if_nearer(case):
     _assert_reached_in_ten_seconds_by_no_larger_a_change(BALL_TUMBLES[case])
 
 
+def solved_without(search, solver, goal, monkeypatch):
+    """Return ``goal``'s fine-flight problem and its Newton from the solve without ``search``.
+
+    ``search``: a module of a search of the ball, turned off for the solve.
+    """
+    with monkeypatch.context() as patched:
+        patched.setattr(search, 'applies', lambda problem: False)
+        farther = solver.solve(goal)
+    problem = GoalProblem(solver, goal, goal.position, goal.orientation)
+    problem.fly_on(problem.fine)
+    start = Newton(problem, farther.values)
+    start.converge(TOLERANCE)
+    return problem, start
+
+
 def test_the_search_of_the_ball_is_never_farther_and_stays_within_its_bound(monkeypatch):
     """From a farther solution, the search returns one no farther, within its flights.
 
@@ -486,13 +501,7 @@ def test_the_search_of_the_ball_is_never_farther_and_stays_within_its_bound(monk
     twist = np.array(BALL_TUMBLES['a'])
     goal = Goal(0, *oracle_pose({}, twist[:3], twist[3:], until), until)
     solver = GoalSolver(scene_world())
-    with monkeypatch.context() as patched:
-        patched.setattr(goal_ball, 'applies', lambda problem: False)
-        farther = solver.solve(goal)
-    problem = GoalProblem(solver, goal, goal.position, goal.orientation)
-    problem.fly_on(problem.fine)
-    start = Newton(problem, farther.values)
-    start.converge(TOLERANCE)
+    problem, start = solved_without(goal_ball, solver, goal, monkeypatch)
     assert change_size(start.values - base) > 1.4 * change_size(twist - base)
     rollout = solver.rollout(0, 'twist', 'world', goal_ball.CHUNK)
     flights = []
@@ -670,13 +679,7 @@ def test_the_search_of_the_coupled_ball_is_never_farther_and_stays_within_its_bo
     goal, twist = spring_goal('a')
     base = np.array([0.1, 0.0, 0.0, 1.0, 2.0, 3.0])
     solver = GoalSolver(scene_world({'springs': [SPRING]}), 1e-3)
-    with monkeypatch.context() as patched:
-        patched.setattr(goal_coupled_ball, 'applies', lambda problem: False)
-        farther = solver.solve(goal)
-    problem = GoalProblem(solver, goal, goal.position, goal.orientation)
-    problem.fly_on(problem.fine)
-    start = Newton(problem, farther.values)
-    start.converge(TOLERANCE)
+    problem, start = solved_without(goal_coupled_ball, solver, goal, monkeypatch)
     assert change_size(start.values - base) > 1.1 * change_size(twist - base)
     calls, flights = [], []
     fly = Rollout.fly

@@ -31,9 +31,7 @@ plain fold pair nor a whole turn away; no start reached them. The search:
 """
 import numpy as np
 
-from rigid_sim.core.goal_grid import ellipsoid, grid, nearest_minima, newton_all
-from rigid_sim.core.goal_newton import Newton, NoConvergence
-from rigid_sim.core.goal_problem import SAME_DISTANCE, TOLERANCE
+from rigid_sim.core.goal_grid import ellipsoid, grid, nearest_minima, newton_all, polished
 
 # rad of end orientation per grid step along the most sensitive direction: the spacing is
 # SPACING / sigma_1. Measured on the bench's targets of tumbling_long, tumbling, gravity and
@@ -112,17 +110,7 @@ def nearer(problem, best, rollout, iterations):
     reach = np.einsum('ij,ij->i', ends, ends)
     roots = np.flatnonzero((angles < ROOT) & (reach < radius ** 2))
     roots = roots[np.argsort(reach[roots], kind='stable')][:POLISHED]
-    for root in roots:
-        if reach[root] + lin >= nearest ** 2:
-            break
-        start = values(orientation.spin_at(ends[root][None]) - problem.current[-3:])[0]
-        newton = Newton(problem, start)
-        try:   # abandoned once an iterate leaves the ball
-            newton.converge(TOLERANCE, lambda u, ball=nearest: problem.distance(u) < ball,
-                            iterations)
-        except NoConvergence:
-            continue
-        distance = problem.distance(newton.values)
-        if distance < nearest * (1.0 - SAME_DISTANCE):
-            best, nearest = newton, distance
-    return best
+    starts = values(orientation.spin_at(ends[roots]) - problem.current[-3:])
+    return polished(problem, best, nearest,
+                    [(reach[root], start, None) for root, start in zip(roots, starts)],
+                    iterations, lin)

@@ -42,9 +42,9 @@ import math
 import numpy as np
 
 from rigid_sim.core.effects.damping import Damping
-from rigid_sim.core.goal_grid import DIFFERENCE, ellipsoid, grid, nearest_minima, newton_all
-from rigid_sim.core.goal_newton import Newton, NoConvergence
-from rigid_sim.core.goal_problem import COARSE_GAIN, SAME_DISTANCE, TOLERANCE
+from rigid_sim.core.goal_grid import (
+    DIFFERENCE, ellipsoid, grid, nearest_minima, newton_all, polished)
+from rigid_sim.core.goal_problem import COARSE_GAIN
 
 # rad of end orientation per grid step (as goal_ball's; 2 rad left one of the 100 farther).
 SPACING = 1.0
@@ -183,17 +183,7 @@ def nearer(problem, best, rollouts, iterations):
     roots = np.flatnonzero((sizes < ROOT) & (reach < nearest ** 2) & apart)
     roots = roots[np.argsort(reach[roots], kind='stable')][:POLISHED]
     problem.fly_on(problem.fine)
-    for root in roots:
-        if reach[root] >= nearest ** 2:
-            break
-        # The coarse Jacobian starts the fine flight's, as a coarse-to-fine solve does.
-        newton = Newton(problem, problem.current + ends[root] @ back, jacobians[root] @ lower.T)
-        try:   # abandoned once an iterate leaves the ball
-            newton.converge(TOLERANCE, lambda u, ball=nearest: problem.distance(u) < ball,
-                            iterations)
-        except NoConvergence:
-            continue
-        distance = problem.distance(newton.values)
-        if distance < nearest * (1.0 - SAME_DISTANCE):
-            best, nearest = newton, distance
-    return best
+    # The coarse Jacobian starts the fine flight's, as a coarse-to-fine solve does.
+    return polished(problem, best, nearest,
+                    [(reach[root], problem.current + ends[root] @ back,
+                      jacobians[root] @ lower.T) for root in roots], iterations)

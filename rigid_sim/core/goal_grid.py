@@ -10,6 +10,9 @@ and a trust-region Newton run from all of them at once, its flights batched as r
 """
 import numpy as np
 
+from rigid_sim.core.goal_newton import Newton, NoConvergence
+from rigid_sim.core.goal_problem import SAME_DISTANCE, TOLERANCE
+
 DIFFERENCE = 1e-6   # the batched Newton's forward differences' step (whitened units)
 
 
@@ -108,3 +111,27 @@ def newton_all(evaluate, z, step, iterations, settled):
         change *= np.minimum(1.0, radius / np.maximum(length, 1e-300))[:, None]
         trial = z + change
     return z, norms, jacobian
+
+
+def polished(problem, best, nearest, roots, iterations, beyond=0.0):
+    """Polish ``roots`` by the goal's own Newton, nearest first; the nearest solution found.
+
+    ``roots``: (reach, start (n,), Jacobian or None) in increasing ``reach``, the squared
+    distance the root's start predicts less ``beyond``; the polishing stops at the first
+    one predicted no nearer than the nearest so far. A Newton is abandoned once an iterate
+    leaves the ball of that distance, so the solution returned is never farther than
+    ``best`` (at ``nearest``).
+    """
+    for reach, start, jacobian in roots:
+        if reach + beyond >= nearest ** 2:
+            break
+        newton = Newton(problem, start, jacobian)
+        try:
+            newton.converge(TOLERANCE, lambda u, ball=nearest: problem.distance(u) < ball,
+                            iterations)
+        except NoConvergence:
+            continue
+        distance = problem.distance(newton.values)
+        if distance < nearest * (1.0 - SAME_DISTANCE):
+            best, nearest = newton, distance
+    return best
