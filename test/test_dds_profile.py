@@ -103,18 +103,22 @@ def _started_node_segments(tmp_path, **chosen):
         processes.end(node)
 
 
-@pytest.mark.skipif(not Path('/proc/self/maps').exists(), reason='needs /proc (Linux)')
-@pytest.mark.skipif(not dds_profile.SHARED_MEMORY.is_dir() or
-                    shutil.disk_usage(dds_profile.SHARED_MEMORY).free < dds_profile.ROOM * SEGMENT,
-                    reason='too little shared memory: the node leaves the profile out')
 def test_the_executable_sends_through_the_profiles_segment(tmp_path):
-    """Fast DDS read the shipped file: the node maps a segment of the size it gives."""
+    """Fast DDS read the shipped file: the node maps a segment of the size it gives.
+
+    Where /dev/shm lacks the room (a container's 64 MB), the node says it left the profile
+    out and maps only Fast DDS's default segments: checked instead, never skipped.
+    """
+    room = shutil.disk_usage(dds_profile.SHARED_MEMORY).free >= dds_profile.ROOM * SEGMENT
     sizes, output = _started_node_segments(tmp_path)
-    assert 'Fast DDS profile:' in output, output
-    assert max(sizes) >= SEGMENT, (sizes, output)
+    if room:
+        assert 'Fast DDS profile:' in output, output
+        assert max(sizes) >= SEGMENT, (sizes, output)
+    else:
+        assert 'not used' in output, output
+        assert sizes and max(sizes) < 2 * DEFAULT_SEGMENT, (sizes, output)
 
 
-@pytest.mark.skipif(not Path('/proc/self/maps').exists(), reason='needs /proc (Linux)')
 def test_the_executable_keeps_the_users_profile(tmp_path):
     """A user's (empty) profile file: Fast DDS's default segments only, no log line."""
     users = tmp_path / 'mine.xml'
