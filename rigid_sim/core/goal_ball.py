@@ -31,7 +31,8 @@ plain fold pair nor a whole turn away; no start reached them. The search:
 """
 import numpy as np
 
-from rigid_sim.core.goal_grid import ellipsoid, grid, nearest_minima, newton_all, polished
+from rigid_sim.core.goal_grid import (
+    ellipsoid, fly_padded, grid, nearest_minima, newton_all, polished)
 
 # rad of end orientation per grid step along the most sensitive direction: the spacing is
 # SPACING / sigma_1. Measured on the bench's targets of tumbling_long, tumbling, gravity and
@@ -75,12 +76,9 @@ class _Orientation:
 
     def __call__(self, z):
         rows = self.problem.start_rows(self.values(self.spin_at(z) - self.problem.current[-3:]))
-        count = len(rows)
-        rows = np.concatenate((rows, np.repeat(rows[:1], -count % CHUNK, axis=0)))
-        finals = []
-        for first in range(0, len(rows), CHUNK):
-            finals.append(self.rollout.fly(rows[first:first + CHUNK])[0])
-        return self.problem.residual_of(np.concatenate(finals)[:count])[:, -3:]
+        finals = [fly_padded(self.rollout, rows[first:first + CHUNK])
+                  for first in range(0, len(rows), CHUNK)]
+        return self.problem.residual_of(np.concatenate(finals))[:, -3:]
 
 
 def nearer(problem, best, rollout, iterations):

@@ -43,7 +43,7 @@ import numpy as np
 
 from rigid_sim.core.effects.damping import Damping
 from rigid_sim.core.goal_grid import (
-    DIFFERENCE, ellipsoid, grid, nearest_minima, newton_all, polished)
+    DIFFERENCE, ellipsoid, fly_padded, grid, nearest_minima, newton_all, polished)
 from rigid_sim.core.goal_problem import COARSE_GAIN
 
 # rad of end orientation per grid step (as goal_ball's; 2 rad left one of the 100 farther).
@@ -105,8 +105,7 @@ class _Twists:
         if copies not in self._prepared:
             rollout.prepare(self.problem.coarse, self.problem.y)
             self._prepared.add(copies)
-        padded = np.concatenate((rows, np.repeat(rows[:1], copies - len(rows), axis=0)))
-        return rollout.fly(padded)[0][:len(rows)]
+        return fly_padded(rollout, rows)
 
     def __call__(self, values):
         """Return the residuals (K, 6) at twists ``values`` (K, 6), CHUNK rows a call."""

@@ -113,6 +113,17 @@ def newton_all(evaluate, z, step, iterations, settled):
     return z, norms, jacobian
 
 
+def fly_padded(rollout, rows):
+    """Return the final states of ``rows`` (K, 13), at most the rollout's copies, in one call.
+
+    The call flies all of its copies: the rows left over are the first row again, their
+    flights dropped (each copy flies on its own).
+    """
+    padded = np.concatenate((rows, np.repeat(rows[:1], rollout.copies.copies - len(rows),
+                                             axis=0)))
+    return rollout.fly(padded)[0][:len(rows)]
+
+
 def polished(problem, best, nearest, roots, iterations, beyond=0.0):
     """Polish ``roots`` by the goal's own Newton, nearest first; the nearest solution found.
 
